@@ -26,6 +26,8 @@ class Status {
   bool ok() const { return code_ == Code::kOk; }
   Code code() const { return code_; }
   const std::string& message() const { return message_; }
+  // "INVALID_ARGUMENT: x is NaN"; "OK" when ok().
+  std::string ToString() const;
 
  private:
   Status(Code code, std::string message) : code_(code), message_(std::move(message)) {}

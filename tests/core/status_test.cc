@@ -11,3 +11,8 @@ TEST(StatusTest, ResultHoldsValueOrError) {
   EXPECT_EQ(bad.status().code(), lmd::Status::Code::kInvalidArgument);
   EXPECT_EQ(bad.status().message(), "x is NaN");
 }
+
+TEST(StatusTest, ToStringNamesTheCode) {
+  EXPECT_EQ(lmd::Status::Ok().ToString(), "OK");
+  EXPECT_EQ(lmd::Status::NotFound("map m1").ToString(), "NOT_FOUND: map m1");
+}
