@@ -1,0 +1,82 @@
+// lmdctl: the command-line tool for lmdd.
+#include <cstdio>
+#include <map>
+
+#include "client/cli/commands.h"
+
+namespace lmd::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "usage: lmdctl [--server HOST:PORT] [--json] [--timeout SECONDS] <command> [options]\n"
+    "commands:\n"
+    "  insert --collection C --file POINTS [--id ID] [--robot R]   store a map from a points file\n"
+    "  get --collection C --id ID [--out POINTS]                   show (and save) a stored map\n"
+    "  delete --collection C --id ID                               delete a stored map\n"
+    "  list --collection C                                         list a collection's maps (alias: maps)\n"
+    "  collections                                                 list collections\n"
+    "  stats [--collection C]                                      server and collection statistics\n"
+    "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
+
+using Command = int (*)(const CommandContext&);
+
+const std::map<std::string, Command>& Commands() {
+  static const std::map<std::string, Command> commands = {
+      {"insert", InsertCommand},   {"get", GetCommand},
+      {"delete", DeleteCommand},   {"list", ListMapsCommand},
+      {"maps", ListMapsCommand},   {"collections", CollectionsCommand},
+      {"stats", StatsCommand},
+  };
+  return commands;
+}
+
+}  // namespace
+
+int Fail(const std::string& message, int code) {
+  std::fprintf(stderr, "lmdctl: %s\n", message.c_str());
+  return code;
+}
+
+int FailCall(const grpc::Status& status) {
+  static const char* const kNames[] = {"OK", "CANCELLED", "UNKNOWN", "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
+                                       "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
+                                       "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED",
+                                       "INTERNAL", "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  const int code = status.error_code();
+  const std::string name = code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
+  std::string message = status.error_message();
+  if (message.empty()) message = "(no message)";
+  return Fail(name + ": " + message);
+}
+
+std::string Required(const Args& args, const std::string& key) {
+  if (!args.Has(key) || args.Get(key).empty()) {
+    Fail("missing --" + key + " (see lmdctl --help)", 2);
+    return "";
+  }
+  return args.Get(key);
+}
+
+int Main(int argc, char** argv) {
+  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h"});
+  if (!args.ok()) return Fail(args.status().message(), 2);
+  if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {
+    std::fputs(kUsage, args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? stderr : stdout);
+    return args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? 2 : 0;
+  }
+  const auto command = Commands().find(args->positional.front());
+  if (command == Commands().end()) return Fail("unknown command '" + args->positional.front() + "' (see --help)", 2);
+  if (args->positional.size() > 1) return Fail("unexpected argument '" + args->positional[1] + "'", 2);
+  Result<long> timeout = GetPositive(*args, "timeout", 30);
+  if (!timeout.ok()) return Fail(timeout.status().message(), 2);
+
+  client::ClientOptions options;
+  options.target = args->Get("server", "127.0.0.1:50051");
+  options.deadline = std::chrono::seconds(*timeout);
+  const client::LmdClient client(options);
+  return command->second(CommandContext{client, *args, args->Switch("json")});
+}
+
+}  // namespace lmd::cli
+
+int main(int argc, char** argv) { return lmd::cli::Main(argc, argv); }

@@ -1,0 +1,16 @@
+#include "client/cli/output.h"
+
+#include <google/protobuf/util/json_util.h>
+
+namespace lmd::cli {
+
+std::string ToJsonLine(const google::protobuf::Message& message) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.always_print_primitive_fields = true;
+  std::string json;
+  const auto status = google::protobuf::util::MessageToJsonString(message, &json, options);
+  return status.ok() ? json : "{}";
+}
+
+}  // namespace lmd::cli

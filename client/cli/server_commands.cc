@@ -1,0 +1,49 @@
+// collections and stats of lmdctl.
+#include <cstdio>
+
+#include "client/cli/commands.h"
+#include "client/cli/output.h"
+
+namespace lmd::cli {
+
+int CollectionsCommand(const CommandContext& ctx) {
+  v1::ListCollectionsResponse response;
+  const grpc::Status status = ctx.client.ListCollections(&response);
+  if (!status.ok()) return FailCall(status);
+  for (const auto& info : response.collections()) {
+    if (ctx.json) {
+      std::printf("%s\n", ToJsonLine(info).c_str());
+    } else {
+      std::printf("%-24s maps=%-8llu points=%llu\n", info.name().c_str(),
+                  static_cast<unsigned long long>(info.maps()), static_cast<unsigned long long>(info.points()));
+    }
+  }
+  return 0;
+}
+
+int StatsCommand(const CommandContext& ctx) {
+  v1::StatsRequest request;
+  request.set_collection(ctx.args.Get("collection"));
+  v1::StatsResponse response;
+  const grpc::Status status = ctx.client.Stats(request, &response);
+  if (!status.ok()) return FailCall(status);
+  if (ctx.json) {
+    std::printf("%s\n", ToJsonLine(response).c_str());
+    return 0;
+  }
+  std::printf("lmdd %s, up %.1f s\n", response.version().c_str(), response.uptime_s());
+  for (const auto& info : response.collections()) {
+    std::printf("collection %-20s maps=%-8llu postings=%-10llu points=%llu\n", info.name().c_str(),
+                static_cast<unsigned long long>(info.maps()), static_cast<unsigned long long>(info.postings()),
+                static_cast<unsigned long long>(info.points()));
+  }
+  for (const auto& method : response.methods()) {
+    std::printf("method %-16s calls=%-8llu errors=%-6llu p50=%.2f ms p95=%.2f ms p99=%.2f ms\n",
+                method.method().c_str(), static_cast<unsigned long long>(method.calls()),
+                static_cast<unsigned long long>(method.errors()), method.p50_ms(), method.p95_ms(),
+                method.p99_ms());
+  }
+  return 0;
+}
+
+}  // namespace lmd::cli

@@ -1,0 +1,65 @@
+#include "client/points_file.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace lmd::client {
+namespace {
+
+// Reads exactly `count` finite numbers and nothing else from `in`.
+bool ReadNumbers(std::istringstream& in, int count, double* out) {
+  for (int i = 0; i < count; ++i) {
+    if (!(in >> out[i]) || !std::isfinite(out[i])) return false;
+  }
+  std::string rest;
+  return !(in >> rest);
+}
+
+}  // namespace
+
+Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) return Status::IoError("cannot read points file " + path);
+  v1::LocalMap map;
+  std::string line;
+  for (int number = 1; std::getline(file, line); ++number) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream in(line);
+    std::string first;
+    if (!(in >> first)) continue;
+    double values[3];
+    const std::string where = path + ":" + std::to_string(number);
+    if (first == "pose") {
+      if (!ReadNumbers(in, 3, values)) {
+        return Status::InvalidArgument(where + ": expected 'pose x y theta' with finite numbers");
+      }
+      v1::Pose2* pose = map.add_trajectory();
+      pose->set_x(values[0]);
+      pose->set_y(values[1]);
+      pose->set_theta(values[2]);
+      continue;
+    }
+    std::istringstream point(line);
+    if (!ReadNumbers(point, 2, values)) {
+      return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got '" + line + "'");
+    }
+    map.add_x(static_cast<float>(values[0]));
+    map.add_y(static_cast<float>(values[1]));
+  }
+  if (map.x_size() == 0) return Status::InvalidArgument(path + ": no points");
+  return map;
+}
+
+Status WritePointsFile(const std::string& path, const v1::LocalMap& map) {
+  std::ofstream out(path);
+  if (!out) return Status::IoError("cannot write points file " + path);
+  out << "# lmd points file: x y (m, own frame); pose x y theta\n";
+  for (const auto& pose : map.trajectory()) out << "pose " << pose.x() << ' ' << pose.y() << ' ' << pose.theta() << '\n';
+  for (int i = 0; i < map.x_size(); ++i) out << map.x(i) << ' ' << map.y(i) << '\n';
+  out.close();
+  return out ? Status::Ok() : Status::IoError("writing " + path + " failed");
+}
+
+}  // namespace lmd::client

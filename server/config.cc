@@ -1,0 +1,110 @@
+#include "server/config.h"
+
+#include <cerrno>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+
+namespace lmd::server {
+namespace {
+
+std::string Trim(const std::string& s) {
+  const auto begin = s.find_first_not_of(" \t\r");
+  if (begin == std::string::npos) return "";
+  const auto end = s.find_last_not_of(" \t\r");
+  return s.substr(begin, end - begin + 1);
+}
+
+Status ParseUnsigned(const std::string& key, const std::string& value, uint64_t max, uint64_t* out) {
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long parsed = std::strtoull(value.c_str(), &end, 10);
+  if (value.empty() || value[0] == '-' || *end != '\0' || errno != 0 || parsed > max) {
+    return Status::InvalidArgument(key + " must be a whole number from 0 to " + std::to_string(max) +
+                                   ", got '" + value + "'");
+  }
+  *out = parsed;
+  return Status::Ok();
+}
+
+template <typename T>
+Status SetUnsigned(const std::string& key, const std::string& value, T* field) {
+  uint64_t parsed = 0;
+  Status status = ParseUnsigned(key, value, std::numeric_limits<T>::max(), &parsed);
+  if (status.ok()) *field = static_cast<T>(parsed);
+  return status;
+}
+
+Status SetBool(const std::string& key, const std::string& value, bool* field) {
+  if (value == "true" || value == "1" || value == "yes") {
+    *field = true;
+  } else if (value == "false" || value == "0" || value == "no") {
+    *field = false;
+  } else {
+    return Status::InvalidArgument(key + " must be true or false, got '" + value + "'");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status SetConfigValue(const std::string& key, const std::string& value, ServerConfig* config) {
+  if (key == "listen") { config->listen = value; return Status::Ok(); }
+  if (key == "data_dir") { config->data_dir = value; return Status::Ok(); }
+  if (key == "log_level") { config->log_level = value; return Status::Ok(); }
+  if (key == "max_message_bytes") {
+    uint64_t parsed = 0;
+    Status status = ParseUnsigned(key, value, std::numeric_limits<int>::max(), &parsed);
+    if (status.ok()) config->max_message_bytes = static_cast<int>(parsed);
+    return status;
+  }
+  if (key == "max_points_per_map") return SetUnsigned(key, value, &config->max_points_per_map);
+  if (key == "max_scans_per_map") return SetUnsigned(key, value, &config->max_scans_per_map);
+  if (key == "max_beams_per_scan") return SetUnsigned(key, value, &config->max_beams_per_scan);
+  if (key == "max_maps_per_batch") return SetUnsigned(key, value, &config->max_maps_per_batch);
+  if (key == "max_top_k") return SetUnsigned(key, value, &config->max_top_k);
+  if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections);
+  if (key == "max_abs_coordinate_m") {
+    char* end = nullptr;
+    const double parsed = std::strtod(value.c_str(), &end);
+    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 1e9) {
+      return Status::InvalidArgument(key + " must be a positive number of metres, got '" + value + "'");
+    }
+    config->max_abs_coordinate_m = parsed;
+    return Status::Ok();
+  }
+  if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
+  if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
+  return Status::InvalidArgument("unknown setting '" + key + "'");
+}
+
+Status LoadConfigFile(const std::string& path, ServerConfig* config) {
+  std::ifstream in(path);
+  if (!in) return Status::IoError("cannot read config file " + path);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    line = Trim(line);
+    if (line.empty()) continue;
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) {
+      return Status::InvalidArgument(path + ":" + std::to_string(number) + ": expected 'key = value'");
+    }
+    Status status = SetConfigValue(Trim(line.substr(0, eq)), Trim(line.substr(eq + 1)), config);
+    if (!status.ok()) {
+      return Status::InvalidArgument(path + ":" + std::to_string(number) + ": " + status.message());
+    }
+  }
+  return Status::Ok();
+}
+
+bool IsLoopbackAddress(const std::string& host_port) {
+  std::string host = host_port;
+  const auto colon = host.rfind(':');
+  if (colon != std::string::npos) host.resize(colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+}  // namespace lmd::server

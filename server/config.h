@@ -1,0 +1,61 @@
+// lmdd's configuration: one plain struct, filled from defaults, then an
+// optional config file, then command-line flags (later wins).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+
+namespace lmd::server {
+
+struct ServerConfig {
+  // Address to serve gRPC on, HOST:PORT. Port 0 picks a free port.
+  std::string listen = "127.0.0.1:50051";
+  // Directory of the RocksDB store; created if absent.
+  std::string data_dir = "./lmd-data";
+  // spdlog level: trace, debug, info, warn, error, critical, off.
+  std::string log_level = "info";
+
+  // Limits. A request over a limit is refused with a message naming it.
+  // Largest gRPC message accepted, bytes (RESOURCE_EXHAUSTED above it).
+  int max_message_bytes = 64 << 20;
+  // Points in one local map.
+  uint32_t max_points_per_map = 200000;
+  // Scans in one local map, and beams in one scan.
+  uint32_t max_scans_per_map = 2000;
+  uint32_t max_beams_per_scan = 4096;
+  // Maps in one InsertMaps call.
+  uint32_t max_maps_per_batch = 1000;
+  // Largest top_k of Retrieve / DetectChanges.
+  uint32_t max_top_k = 1000;
+  // Number of collections.
+  uint32_t max_collections = 1000;
+  // Largest absolute coordinate of a point or pose, m. Catches unit mistakes
+  // (mm sent as m) and garbage before it reaches the method.
+  double max_abs_coordinate_m = 100000.0;
+
+  // fsync the write-ahead log before acknowledging an insert. Off: an
+  // acknowledged insert survives a crash of lmdd (the WAL is written before the
+  // ack) but not a power loss or kernel crash. On: it survives those too, at
+  // the cost of one fsync per insert call.
+  bool sync_writes = false;
+  // Serve on a non-loopback address without TLS and tokens. Off by default:
+  // lmdd then refuses to listen anywhere but loopback.
+  bool allow_insecure_remote = false;
+};
+
+// Reads "key = value" lines ('#' starts a comment; keys are the field names
+// above) into *config. InvalidArgument naming file:line on an unknown key or a
+// bad value; IoError if the file cannot be read.
+Status LoadConfigFile(const std::string& path, ServerConfig* config);
+
+// Applies one setting by name, e.g. ("max_top_k", "50"). InvalidArgument if the
+// key is unknown or the value does not parse.
+Status SetConfigValue(const std::string& key, const std::string& value, ServerConfig* config);
+
+// True if HOST of a HOST:PORT address is a loopback address or "localhost".
+bool IsLoopbackAddress(const std::string& host_port);
+
+}  // namespace lmd::server

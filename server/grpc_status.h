@@ -1,0 +1,15 @@
+// The one place where lmd's Status becomes a gRPC status.
+#pragma once
+
+#include <grpcpp/support/status.h>
+
+#include "core/status.h"
+
+namespace lmd::server {
+
+// InvalidArgument -> INVALID_ARGUMENT, NotFound -> NOT_FOUND, AlreadyExists ->
+// ALREADY_EXISTS, ResourceExhausted -> RESOURCE_EXHAUSTED, Corruption /
+// IoError / Internal -> INTERNAL (the message is kept), Ok -> OK.
+grpc::Status ToGrpcStatus(const Status& status);
+
+}  // namespace lmd::server

@@ -1,0 +1,115 @@
+#include "server/validate.h"
+
+#include <cmath>
+
+namespace lmd::server {
+namespace {
+
+bool AllCharsIn(const std::string& s, const std::string& extra) {
+  for (char c : s) {
+    const bool alnum = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    if (!alnum && extra.find(c) == std::string::npos) return false;
+  }
+  return true;
+}
+
+// OK if v is finite and |v| <= limit; otherwise says which value is bad.
+Status CheckCoordinate(double v, double limit, const std::string& what) {
+  if (std::isnan(v)) return Status::InvalidArgument(what + " is NaN");
+  if (std::isinf(v)) return Status::InvalidArgument(what + " is infinite");
+  if (std::fabs(v) > limit) {
+    return Status::InvalidArgument(what + " = " + std::to_string(v) + " m exceeds max_abs_coordinate_m (" +
+                                   std::to_string(limit) + ")");
+  }
+  return Status::Ok();
+}
+
+Status CheckPose(const v1::Pose2& pose, double limit, const std::string& what) {
+  Status s = CheckCoordinate(pose.x(), limit, what + ".x");
+  if (s.ok()) s = CheckCoordinate(pose.y(), limit, what + ".y");
+  if (s.ok() && !std::isfinite(pose.theta())) s = Status::InvalidArgument(what + ".theta is not finite");
+  return s;
+}
+
+}  // namespace
+
+Status ValidateCollectionName(const std::string& name) {
+  if (name.empty()) return Status::InvalidArgument("collection is empty");
+  if (name.size() > 64 || !AllCharsIn(name, "._-")) {
+    return Status::InvalidArgument("collection '" + name + "' must be 1 to 64 characters from [A-Za-z0-9._-]");
+  }
+  return Status::Ok();
+}
+
+Status ValidateMapId(const std::string& map_id, bool allow_empty) {
+  if (map_id.empty()) return allow_empty ? Status::Ok() : Status::InvalidArgument("map_id is empty");
+  if (map_id.size() > 128 || !AllCharsIn(map_id, "._:-")) {
+    return Status::InvalidArgument("map_id '" + map_id + "' must be 1 to 128 characters from [A-Za-z0-9._:-]");
+  }
+  return Status::Ok();
+}
+
+Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, const std::string& where) {
+  const double limit = config.max_abs_coordinate_m;
+  if (map.x_size() != map.y_size()) {
+    return Status::InvalidArgument(where + ": x has " + std::to_string(map.x_size()) + " values but y has " +
+                                   std::to_string(map.y_size()));
+  }
+  if (map.x_size() == 0) return Status::InvalidArgument(where + ": the map has no points");
+  if (static_cast<uint32_t>(map.x_size()) > config.max_points_per_map) {
+    return Status::InvalidArgument(where + ": " + std::to_string(map.x_size()) +
+                                   " points exceed max_points_per_map (" +
+                                   std::to_string(config.max_points_per_map) + ")");
+  }
+  for (int i = 0; i < map.x_size(); ++i) {
+    const std::string point = where + ": point " + std::to_string(i);
+    Status s = CheckCoordinate(map.x(i), limit, point + " x");
+    if (s.ok()) s = CheckCoordinate(map.y(i), limit, point + " y");
+    if (!s.ok()) return s;
+  }
+  for (int i = 0; i < map.trajectory_size(); ++i) {
+    Status s = CheckPose(map.trajectory(i), limit, where + ": trajectory pose " + std::to_string(i));
+    if (!s.ok()) return s;
+  }
+  if (static_cast<uint32_t>(map.scans_size()) > config.max_scans_per_map) {
+    return Status::InvalidArgument(where + ": " + std::to_string(map.scans_size()) +
+                                   " scans exceed max_scans_per_map (" + std::to_string(config.max_scans_per_map) +
+                                   ")");
+  }
+  for (int i = 0; i < map.scans_size(); ++i) {
+    const v1::Scan& scan = map.scans(i);
+    const std::string name = where + ": scan " + std::to_string(i);
+    Status s = CheckPose(scan.pose(), limit, name + " pose");
+    if (!s.ok()) return s;
+    if (!(scan.angle_step() > 0) || !std::isfinite(scan.angle_step()) || !std::isfinite(scan.first_angle())) {
+      return Status::InvalidArgument(name + ": angle_step must be a positive finite number of radians");
+    }
+    if (!(scan.max_range() > 0) || !std::isfinite(scan.max_range())) {
+      return Status::InvalidArgument(name + ": max_range must be a positive finite number of metres");
+    }
+    if (static_cast<uint32_t>(scan.ranges_size()) > config.max_beams_per_scan) {
+      return Status::InvalidArgument(name + ": " + std::to_string(scan.ranges_size()) +
+                                     " beams exceed max_beams_per_scan (" +
+                                     std::to_string(config.max_beams_per_scan) + ")");
+    }
+    for (int b = 0; b < scan.ranges_size(); ++b) {
+      if (std::isnan(scan.ranges(b)) || scan.ranges(b) < 0) {
+        return Status::InvalidArgument(name + ": range " + std::to_string(b) + " is negative or NaN");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index) {
+  const v1::MapMetadata& meta = request.metadata();
+  std::string where = "map " + std::to_string(index);
+  if (!meta.map_id().empty()) where += " ('" + meta.map_id() + "')";
+  Status s = ValidateCollectionName(meta.collection());
+  if (s.ok()) s = ValidateMapId(meta.map_id(), /*allow_empty=*/true);
+  if (s.ok() && meta.has_pose_hint()) s = CheckPose(meta.pose_hint(), config.max_abs_coordinate_m, "pose_hint");
+  if (!s.ok()) return Status::InvalidArgument(where + ": " + s.message());
+  return ValidateLocalMap(request.map(), config, where);
+}
+
+}  // namespace lmd::server

@@ -1,0 +1,29 @@
+// Checks of incoming requests, before anything reaches the store or the
+// method. Each failure says what is wrong and where ("map 2 ('m7'): point 15
+// has a NaN x"), so a robot's engineer can fix the sender.
+#pragma once
+
+#include <string>
+
+#include "core/status.h"
+#include "lmd/v1/lmd.pb.h"
+#include "server/config.h"
+
+namespace lmd::server {
+
+// 1 to 64 characters from [A-Za-z0-9._-]. InvalidArgument otherwise.
+Status ValidateCollectionName(const std::string& name);
+
+// 1 to 128 characters from [A-Za-z0-9._:-]; empty allowed when allow_empty
+// (the server then assigns one). InvalidArgument otherwise.
+Status ValidateMapId(const std::string& map_id, bool allow_empty);
+
+// A local map: at least one point, x and y of equal length, every coordinate
+// finite and within max_abs_coordinate_m, counts within the config's limits,
+// scans with a positive angle step and max range. `where` prefixes messages.
+Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, const std::string& where);
+
+// Metadata and map of one map to insert; `index` is its place in the batch.
+Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index);
+
+}  // namespace lmd::server
