@@ -1,0 +1,47 @@
+#include "server/config.h"
+
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "tests/server/test_server.h"
+
+namespace lmd::server {
+namespace {
+
+TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
+  testing::TempDir dir;
+  const std::string path = dir.path() + "/lmdd.conf";
+  std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n";
+  ServerConfig config;
+  ASSERT_TRUE(LoadConfigFile(path, &config).ok());
+  EXPECT_EQ(config.listen, "127.0.0.1:6000");
+  EXPECT_EQ(config.max_top_k, 50u);
+  EXPECT_TRUE(config.sync_writes);
+}
+
+TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
+  testing::TempDir dir;
+  const std::string path = dir.path() + "/lmdd.conf";
+  std::ofstream(path) << "max_top_k = 5\nmax_top_kk = 5\n";
+  ServerConfig config;
+  Status status = LoadConfigFile(path, &config);
+  EXPECT_EQ(status.code(), Status::Code::kInvalidArgument);
+  EXPECT_NE(status.message().find("lmdd.conf:2"), std::string::npos) << status.message();
+
+  EXPECT_FALSE(SetConfigValue("max_top_k", "-3", &config).ok());
+  EXPECT_FALSE(SetConfigValue("max_top_k", "ten", &config).ok());
+  EXPECT_FALSE(SetConfigValue("sync_writes", "maybe", &config).ok());
+  EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);
+}
+
+TEST(ConfigTest, LoopbackAddressesAreRecognised) {
+  EXPECT_TRUE(IsLoopbackAddress("127.0.0.1:50051"));
+  EXPECT_TRUE(IsLoopbackAddress("localhost:1"));
+  EXPECT_TRUE(IsLoopbackAddress("[::1]:50051"));
+  EXPECT_FALSE(IsLoopbackAddress("0.0.0.0:50051"));
+  EXPECT_FALSE(IsLoopbackAddress("10.1.2.3:50051"));
+}
+
+}  // namespace
+}  // namespace lmd::server

@@ -1,0 +1,94 @@
+// lmdctl as a user runs it: exit codes, one line on stderr for errors, and
+// one JSON object per line with --json.
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+struct CliRun {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// Runs lmdctl with `args` (shell words), capturing stdout and stderr.
+CliRun RunLmdctl(const std::string& args, const TempDir& dir) {
+  const std::string err_path = dir.path() + "/stderr.txt";
+  const std::string command = std::string(LMDCTL_PATH) + " " + args + " 2>" + err_path;
+  CliRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  run.err.assign(std::istreambuf_iterator<char>(err), {});
+  return run;
+}
+
+int CountLines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+
+class LmdctlTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::ofstream points(dir_.path() + "/room.txt");
+    points << "# a room\npose 0 0 0\n0 0\n1 0\n1 1\n0 1\n";
+  }
+  TempDir dir_;
+  TempDir data_;
+};
+
+TEST_F(LmdctlTest, InsertThenListPrintsOneJsonObjectPerMap) {
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  CliRun inserted = RunLmdctl(base + "insert --collection site --id r1 --file " + dir_.path() + "/room.txt", dir_);
+  ASSERT_EQ(inserted.exit_code, 0) << inserted.err;
+  EXPECT_NE(inserted.out.find("inserted site/r1 (4 points)"), std::string::npos) << inserted.out;
+  ASSERT_EQ(RunLmdctl(base + "insert --collection site --id r2 --file " + dir_.path() + "/room.txt", dir_).exit_code, 0);
+
+  CliRun listed = RunLmdctl(base + "--json maps --collection site", dir_);
+  ASSERT_EQ(listed.exit_code, 0) << listed.err;
+  EXPECT_EQ(CountLines(listed.out), 2);
+  EXPECT_EQ(listed.out.rfind("{\"collection\":\"site\",\"map_id\":\"r1\"", 0), 0u) << listed.out;
+}
+
+TEST_F(LmdctlTest, MissingMapExitsOneWithOneLineOnStderr) {
+  TestServer server(data_.path());
+  CliRun run = RunLmdctl("--server " + server.address() + " get --collection site --id nope", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("NOT_FOUND"), std::string::npos) << run.err;
+  EXPECT_TRUE(run.out.empty());
+}
+
+TEST_F(LmdctlTest, UsageErrorsExitTwo) {
+  EXPECT_EQ(RunLmdctl("frobnicate", dir_).exit_code, 2);
+  EXPECT_EQ(RunLmdctl("insert --collection site", dir_).exit_code, 2);
+  EXPECT_EQ(RunLmdctl("", dir_).exit_code, 2);
+  EXPECT_EQ(RunLmdctl("--help", dir_).exit_code, 0);
+}
+
+TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
+  std::ofstream(dir_.path() + "/bad.txt") << "0 0\n1 oops\n";
+  TestServer server(data_.path());
+  CliRun run = RunLmdctl("--server " + server.address() + " insert --collection site --file " + dir_.path() + "/bad.txt",
+                      dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("bad.txt:2"), std::string::npos) << run.err;
+}
+
+TEST_F(LmdctlTest, UnreachableServerFailsCleanly) {
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 --timeout 2 collections", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("UNAVAILABLE"), std::string::npos) << run.err;
+}
+
+}  // namespace
+}  // namespace lmd::testing

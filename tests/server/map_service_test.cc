@@ -1,0 +1,257 @@
+// Storing maps through lmdd over gRPC: round trips, durability across a
+// restart, and clear errors for bad input.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+class MapServiceTest : public ::testing::Test {
+ protected:
+  TempDir dir_;
+};
+
+TEST_F(MapServiceTest, InsertedMapReadsBackIdentically) {
+  TestServer server(dir_.path());
+  ASSERT_TRUE(server.ok());
+  const v1::LocalMap map = SquareRoomMap();
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "m1", map), &inserted).ok());
+  ASSERT_EQ(inserted.maps_size(), 1);
+  EXPECT_EQ(inserted.maps(0).point_count(), 40u);
+
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("m1");
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server.client().GetMap(get, &got).ok());
+  EXPECT_EQ(got.map().map().SerializeAsString(), map.SerializeAsString());
+  EXPECT_EQ(got.map().metadata().collection(), "site");
+}
+
+TEST_F(MapServiceTest, ServerAssignsIncreasingIdsWhenNoneGiven) {
+  TestServer server(dir_.path());
+  v1::InsertMapsRequest request = OneMapRequest("site", "", SquareRoomMap());
+  *request.add_maps() = request.maps(0);
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(request, &inserted).ok());
+  ASSERT_EQ(inserted.maps_size(), 2);
+  EXPECT_FALSE(inserted.maps(0).map_id().empty());
+  EXPECT_LT(inserted.maps(0).map_id(), inserted.maps(1).map_id());
+}
+
+TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
+  {
+    TestServer server(dir_.path());
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "kept", SquareRoomMap(12)), &inserted).ok());
+  }
+  TestServer restarted(dir_.path());
+  ASSERT_TRUE(restarted.ok());
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("kept");
+  v1::GetMapResponse got;
+  ASSERT_TRUE(restarted.client().GetMap(get, &got).ok());
+  EXPECT_EQ(got.map().map().x_size(), 12);
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(restarted.client().ListCollections(&collections).ok());
+  ASSERT_EQ(collections.collections_size(), 1);
+  EXPECT_EQ(collections.collections(0).maps(), 1u);
+  EXPECT_EQ(collections.collections(0).points(), 12u);
+}
+
+TEST_F(MapServiceTest, ReplacingAMapKeepsCountsRight) {
+  TestServer server(dir_.path());
+  v1::InsertMapsResponse ignored;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap(10)), &ignored).ok());
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap(30)), &ignored).ok());
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(server.client().ListCollections(&collections).ok());
+  EXPECT_EQ(collections.collections(0).maps(), 1u);
+  EXPECT_EQ(collections.collections(0).points(), 30u);
+}
+
+TEST_F(MapServiceTest, DeleteRemovesTheMapAndItsCount) {
+  TestServer server(dir_.path());
+  v1::InsertMapsResponse ignored;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &ignored).ok());
+  v1::DeleteMapRequest del;
+  del.set_collection("site");
+  del.set_map_id("a");
+  ASSERT_TRUE(server.client().DeleteMap(del).ok());
+  EXPECT_EQ(server.client().DeleteMap(del).error_code(), grpc::StatusCode::NOT_FOUND);
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("a");
+  v1::GetMapResponse got;
+  EXPECT_EQ(server.client().GetMap(get, &got).error_code(), grpc::StatusCode::NOT_FOUND);
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(server.client().ListCollections(&collections).ok());
+  EXPECT_EQ(collections.collections(0).maps(), 0u);
+}
+
+TEST_F(MapServiceTest, ListMapsPagesThroughEveryMapInIdOrder) {
+  TestServer server(dir_.path());
+  v1::InsertMapsRequest request;
+  for (int i = 0; i < 25; ++i) {
+    *request.add_maps() = OneMapRequest("site", "map-" + std::to_string(100 + i), SquareRoomMap(8)).maps(0);
+  }
+  v1::InsertMapsResponse ignored;
+  ASSERT_TRUE(server.client().InsertMaps(request, &ignored).ok());
+  v1::ListMapsRequest list;
+  list.set_collection("site");
+  list.set_page_size(10);
+  std::vector<std::string> ids;
+  int pages = 0;
+  do {
+    v1::ListMapsResponse page;
+    ASSERT_TRUE(server.client().ListMaps(list, &page).ok());
+    for (const auto& meta : page.maps()) ids.push_back(meta.map_id());
+    list.set_page_token(page.next_page_token());
+    ++pages;
+  } while (!list.page_token().empty() && pages < 10);
+  ASSERT_EQ(ids.size(), 25u);
+  EXPECT_EQ(pages, 3);
+  EXPECT_TRUE(std::is_sorted(ids.begin(), ids.end()));
+  EXPECT_EQ(ids.front(), "map-100");
+}
+
+TEST_F(MapServiceTest, StreamInsertAcknowledgesEveryMapInOrder) {
+  TestServer server(dir_.path());
+  std::vector<v1::InsertMapRequest> requests;
+  for (int i = 0; i < 5; ++i) requests.push_back(OneMapRequest("fleet", "s" + std::to_string(i), SquareRoomMap()).maps(0));
+  v1::InsertMapsResponse response;
+  ASSERT_TRUE(server.client().StreamInsertMaps(requests, &response).ok());
+  ASSERT_EQ(response.maps_size(), 5);
+  EXPECT_EQ(response.maps(4).map_id(), "s4");
+}
+
+// --- bad input -------------------------------------------------------------
+
+grpc::Status InsertOne(const TestServer& server, const v1::LocalMap& map, const std::string& collection = "site") {
+  v1::InsertMapsResponse ignored;
+  return server.client().InsertMaps(OneMapRequest(collection, "bad", map), &ignored);
+}
+
+TEST_F(MapServiceTest, EmptyMapIsRejectedWithAMessage) {
+  TestServer server(dir_.path());
+  const grpc::Status status = InsertOne(server, v1::LocalMap());
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("no points"), std::string::npos) << status.error_message();
+}
+
+TEST_F(MapServiceTest, NanAndInfiniteCoordinatesAreRejectedNamingThePoint) {
+  TestServer server(dir_.path());
+  v1::LocalMap nan_map = SquareRoomMap();
+  nan_map.set_x(7, std::numeric_limits<float>::quiet_NaN());
+  grpc::Status status = InsertOne(server, nan_map);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("point 7 x is NaN"), std::string::npos) << status.error_message();
+
+  v1::LocalMap inf_map = SquareRoomMap();
+  inf_map.set_y(3, std::numeric_limits<float>::infinity());
+  status = InsertOne(server, inf_map);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("point 3 y is infinite"), std::string::npos) << status.error_message();
+}
+
+TEST_F(MapServiceTest, MismatchedArraysAndBadNamesAreRejected) {
+  TestServer server(dir_.path());
+  v1::LocalMap uneven = SquareRoomMap();
+  uneven.add_x(1.0f);
+  EXPECT_EQ(InsertOne(server, uneven).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(InsertOne(server, SquareRoomMap(), "bad/name").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(InsertOne(server, SquareRoomMap(), "").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+TEST_F(MapServiceTest, ABadMapInABatchStoresNothing) {
+  TestServer server(dir_.path());
+  v1::InsertMapsRequest request = OneMapRequest("site", "good", SquareRoomMap());
+  v1::LocalMap bad = SquareRoomMap();
+  bad.set_x(0, std::numeric_limits<float>::quiet_NaN());
+  *request.add_maps() = OneMapRequest("site", "bad", bad).maps(0);
+  v1::InsertMapsResponse ignored;
+  const grpc::Status status = server.client().InsertMaps(request, &ignored);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("map 1 ('bad')"), std::string::npos) << status.error_message();
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(server.client().ListCollections(&collections).ok());
+  EXPECT_EQ(collections.collections_size(), 0);
+}
+
+TEST_F(MapServiceTest, UnknownCollectionAndMapAreNotFound) {
+  TestServer server(dir_.path());
+  v1::GetMapRequest get;
+  get.set_collection("nowhere");
+  get.set_map_id("m1");
+  v1::GetMapResponse got;
+  grpc::Status status = server.client().GetMap(get, &got);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_NE(status.error_message().find("unknown collection 'nowhere'"), std::string::npos);
+
+  v1::InsertMapsResponse ignored;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "m1", SquareRoomMap()), &ignored).ok());
+  get.set_collection("site");
+  get.set_map_id("m2");
+  status = server.client().GetMap(get, &got);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_NE(status.error_message().find("no map 'm2'"), std::string::npos);
+
+  v1::ListMapsRequest list;
+  list.set_collection("nowhere");
+  v1::ListMapsResponse listed;
+  EXPECT_EQ(server.client().ListMaps(list, &listed).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+TEST_F(MapServiceTest, MessageOverTheSizeLimitIsResourceExhausted) {
+  server::ServerConfig config;
+  config.max_message_bytes = 64 * 1024;
+  TestServer server(dir_.path(), config);
+  const grpc::Status status = InsertOne(server, SquareRoomMap(20000));  // ~160 KB of points
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_FALSE(status.error_message().empty());
+}
+
+TEST_F(MapServiceTest, LimitsOnPointsAndBatchSizeNameTheLimit) {
+  server::ServerConfig config;
+  config.max_points_per_map = 30;
+  config.max_maps_per_batch = 2;
+  TestServer server(dir_.path(), config);
+  grpc::Status status = InsertOne(server, SquareRoomMap(31));
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("max_points_per_map"), std::string::npos);
+
+  v1::InsertMapsRequest request = OneMapRequest("site", "", SquareRoomMap(8));
+  *request.add_maps() = request.maps(0);
+  *request.add_maps() = request.maps(0);
+  v1::InsertMapsResponse ignored;
+  status = server.client().InsertMaps(request, &ignored);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("max_maps_per_batch"), std::string::npos);
+}
+
+TEST_F(MapServiceTest, RetrieveIsUnimplementedUntilTheIndexLands) {
+  TestServer server(dir_.path());
+  v1::RetrieveRequest request;
+  request.set_collection("site");
+  *request.mutable_map() = SquareRoomMap();
+  v1::RetrieveResponse response;
+  EXPECT_EQ(server.client().Retrieve(request, &response).error_code(), grpc::StatusCode::UNIMPLEMENTED);
+}
+
+TEST_F(MapServiceTest, RemoteAddressWithoutSecurityIsRefused) {
+  server::ServerConfig config;
+  config.listen = "0.0.0.0:0";
+  config.data_dir = dir_.path();
+  auto started = server::LmdServer::Start(config);
+  ASSERT_FALSE(started.ok());
+  EXPECT_NE(started.status().message().find("allow_insecure_remote"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lmd::testing
