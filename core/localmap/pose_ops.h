@@ -1,0 +1,36 @@
+// Small SE(2) helpers shared by the local map builder, simulator and ground
+// truth. Header-only, all inline.
+#pragma once
+
+#include <cmath>
+
+#include "core/types.h"
+
+namespace lmd {
+
+// Wraps an angle to (-pi, pi].
+inline double NormalizeAngle(double a) {
+  a = std::fmod(a + M_PI, 2.0 * M_PI);
+  if (a <= 0.0) a += 2.0 * M_PI;
+  return a - M_PI;
+}
+
+// a * b: pose b (expressed in frame a) expressed in a's parent frame.
+inline Pose2 Compose(const Pose2& a, const Pose2& b) {
+  const double c = std::cos(a.theta), s = std::sin(a.theta);
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, NormalizeAngle(a.theta + b.theta)};
+}
+
+// a^-1.
+inline Pose2 Inverse(const Pose2& a) {
+  const double c = std::cos(a.theta), s = std::sin(a.theta);
+  return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), NormalizeAngle(-a.theta)};
+}
+
+// Point p (in frame a) expressed in a's parent frame.
+inline Point2 TransformPoint(const Pose2& a, const Point2& p) {
+  const double c = std::cos(a.theta), s = std::sin(a.theta);
+  return {a.x + c * p.x - s * p.y, a.y + s * p.x + c * p.y};
+}
+
+}  // namespace lmd
