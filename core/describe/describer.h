@@ -1,0 +1,71 @@
+// Local map descriptor (paper sec. "Local Map Descriptor"): a bag of features,
+// each an appearance word (B-bit code of a polestar / shape-context histogram
+// around an interest point), a pose word source (the interest point's position
+// in the planned frame) and a 60-bit change word.
+//
+// Interest points: the map's points are binned on an interest_cell_m grid laid
+// in the PLANNED frame (so two maps of one place, whose frames agree, pick the
+// same cells); one interest point per occupied cell = the point of that cell
+// nearest to the cell centre. 0.1 m cells (the paper's) give 500-3000 features
+// on real logs, 7-40 KB per map; 0.5 m cells keep the wall layout (one point
+// every 0.5 m along each wall) at ~25x fewer features, and max_features (the
+// cells nearest to the planned origin) caps the worst case so that a stored
+// map stays under 2 KB with its postings.
+//
+// Histogram: points rasterised at 0.01 m (duplicates in a cell count once),
+// those within radius R of the interest point counted in `shells` equal-width
+// rings x A sectors. Sectors are measured from the planned heading turned by
+// k * 90 deg, k in 0..3 chosen per feature as the axis direction holding the
+// most points (ties broken toward the next counter-clockwise axis). Because
+// the planned heading is only defined modulo 90 deg, this canonical k makes
+// the appearance and change words of a place the same under any of the 4
+// orientation hypotheses the index tries, for every A (A = 3 and 6 sectors do
+// not map onto themselves under a 90 deg turn, so a fixed sector origin would
+// not). Sector boundaries sit 15 deg off the frame axes so that Manhattan
+// walls never lie on a boundary.
+//
+// Appearance word: sign(W h) with W a B x D Gaussian matrix from
+// projection_seed (std::mt19937_64 + Box-Muller, versioned by
+// kProjectionVersion) and h the histogram L1-normalised then centred
+// (minus 1/D). Change word: the (R, A) = (6, 6) histogram (10 x 6 = 60 bins),
+// bit i = bin i > mean of the 60 bins.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/describe/lmd_codec.h"
+#include "core/types.h"
+
+namespace lmd {
+
+// Bumped whenever the projection matrix generation changes (words of
+// different versions are not comparable).
+inline constexpr uint32_t kProjectionVersion = 1;
+
+struct DescriptorSetting {
+  double radius_m = 1.0;  // R, m
+  int sectors = 1;        // A
+};
+
+// The paper's settings #1..#8: (1,1) (6,3) (12,6) (1,6) (3,6) (6,6) (3,1)
+// (6,1). Numbers outside 1..8 give #1.
+DescriptorSetting PaperDescriptorSetting(int number);
+
+struct DescriberOptions {
+  DescriptorSetting setting = {1.0, 1};  // paper setting #1 (default)
+  int shells = 10;                       // radial shells (paper: 10)
+  int word_bits = 10;                    // B, 1..16 (paper: 10)
+  uint64_t projection_seed = 0x6c6d64'70726f6aULL;  // "lmdproj"
+  double raster_m = 0.01;                // m, temporary grid (paper: 0.01)
+  double interest_cell_m = 0.5;          // m, interest point grid (paper: 0.1; see above)
+  int max_features = 80;                 // cap, nearest the planned origin; 0 = none
+  bool change_words = true;              // compute the (6, 6) change word
+};
+
+// Describes `map` in `frame` (usually PlanViewpoint(map)). Features sorted by
+// (y, x) of their interest cell; deterministic. An empty map gives an Lmd
+// with no features and frame = `frame`.
+Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& options = {});
+
+}  // namespace lmd
