@@ -13,6 +13,10 @@ const char* CodeName(Status::Code code) {
     case Status::Code::kIoError: return "IO_ERROR";
     case Status::Code::kResourceExhausted: return "RESOURCE_EXHAUSTED";
     case Status::Code::kInternal: return "INTERNAL";
+    case Status::Code::kUnauthenticated: return "UNAUTHENTICATED";
+    case Status::Code::kPermissionDenied: return "PERMISSION_DENIED";
+    case Status::Code::kCancelled: return "CANCELLED";
+    case Status::Code::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
   }
   return "UNKNOWN";
 }

@@ -11,7 +11,10 @@ namespace lmd {
 
 class Status {
  public:
-  enum class Code { kOk, kInvalidArgument, kNotFound, kAlreadyExists, kCorruption, kIoError, kResourceExhausted, kInternal };
+  enum class Code {
+    kOk, kInvalidArgument, kNotFound, kAlreadyExists, kCorruption, kIoError, kResourceExhausted, kInternal,
+    kUnauthenticated, kPermissionDenied, kCancelled, kDeadlineExceeded,
+  };
 
   Status() = default;
   static Status Ok() { return Status(); }
@@ -22,6 +25,10 @@ class Status {
   static Status IoError(std::string msg) { return Status(Code::kIoError, std::move(msg)); }
   static Status ResourceExhausted(std::string msg) { return Status(Code::kResourceExhausted, std::move(msg)); }
   static Status Internal(std::string msg) { return Status(Code::kInternal, std::move(msg)); }
+  static Status Unauthenticated(std::string msg) { return Status(Code::kUnauthenticated, std::move(msg)); }
+  static Status PermissionDenied(std::string msg) { return Status(Code::kPermissionDenied, std::move(msg)); }
+  static Status Cancelled(std::string msg) { return Status(Code::kCancelled, std::move(msg)); }
+  static Status DeadlineExceeded(std::string msg) { return Status(Code::kDeadlineExceeded, std::move(msg)); }
 
   bool ok() const { return code_ == Code::kOk; }
   Code code() const { return code_; }

@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config ccache git
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
-  librocksdb-dev libspdlog-dev libfmt-dev libeigen3-dev zlib1g-dev
+  librocksdb-dev libspdlog-dev libfmt-dev libeigen3-dev zlib1g-dev libmicrohttpd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 

@@ -73,6 +73,13 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
     config->max_abs_coordinate_m = parsed;
     return Status::Ok();
   }
+  if (key == "tls_cert_file") { config->tls_cert_file = value; return Status::Ok(); }
+  if (key == "tls_key_file") { config->tls_key_file = value; return Status::Ok(); }
+  if (key == "tls_client_ca_file") { config->tls_client_ca_file = value; return Status::Ok(); }
+  if (key == "tokens_file") { config->tokens_file = value; return Status::Ok(); }
+  if (key == "metrics_listen") { config->metrics_listen = value; return Status::Ok(); }
+  if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
+  if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
   return Status::InvalidArgument("unknown setting '" + key + "'");

@@ -44,6 +44,23 @@ struct ServerConfig {
   // Serve on a non-loopback address without TLS and tokens. Off by default:
   // lmdd then refuses to listen anywhere but loopback.
   bool allow_insecure_remote = false;
+
+  // Security. TLS is on when both the certificate and key files are set
+  // (PEM). With a client CA file, clients must present a certificate it signed.
+  std::string tls_cert_file;
+  std::string tls_key_file;
+  std::string tls_client_ca_file;
+  // Bearer tokens per collection (format in auth.h). Empty: no token checks.
+  std::string tokens_file;
+
+  // Concurrency. Threads that run calls (0: one per hardware thread), and
+  // calls that may wait for one; a call beyond that is refused at once with
+  // RESOURCE_EXHAUSTED, which bounds memory under overload.
+  uint32_t worker_threads = 0;
+  uint32_t max_queued_calls = 1024;
+
+  // Prometheus text metrics over HTTP at http://HOST:PORT/metrics. Empty: off.
+  std::string metrics_listen;
 };
 
 // Reads "key = value" lines ('#' starts a comment; keys are the field names

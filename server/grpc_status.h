@@ -8,7 +8,8 @@
 namespace lmd::server {
 
 // InvalidArgument -> INVALID_ARGUMENT, NotFound -> NOT_FOUND, AlreadyExists ->
-// ALREADY_EXISTS, ResourceExhausted -> RESOURCE_EXHAUSTED, Corruption /
+// ALREADY_EXISTS, ResourceExhausted -> RESOURCE_EXHAUSTED, Unauthenticated,
+// PermissionDenied, Cancelled, DeadlineExceeded -> the same, Corruption /
 // IoError / Internal -> INTERNAL (the message is kept), Ok -> OK.
 grpc::Status ToGrpcStatus(const Status& status);
 

@@ -1,8 +1,6 @@
 #include "server/lmd_service.h"
 
-#include <spdlog/spdlog.h>
-
-#include "server/grpc_status.h"
+#include "server/stream_insert.h"
 #include "server/validate.h"
 
 namespace lmd::server {
@@ -10,110 +8,147 @@ namespace {
 
 constexpr uint32_t kDefaultPageSize = 1000;
 
-v1::StoredMap ToStoredMap(const v1::InsertMapRequest& request) {
-  v1::StoredMap stored;
-  *stored.mutable_metadata() = request.metadata();
-  *stored.mutable_map() = request.map();
-  return stored;
-}
-
 // Validates the lookup key of a get / delete.
 Status ValidateKey(const std::string& collection, const std::string& map_id) {
   Status s = ValidateCollectionName(collection);
   return s.ok() ? ValidateMapId(map_id, /*allow_empty=*/false) : s;
 }
 
+// The collection a batch writes to, for logs ("" if none or several).
+std::string BatchCollection(const v1::InsertMapsRequest& request) {
+  if (request.maps_size() == 0) return "";
+  const std::string& first = request.maps(0).metadata().collection();
+  for (const auto& map : request.maps()) {
+    if (map.metadata().collection() != first) return "";
+  }
+  return first;
+}
+
 }  // namespace
 
-LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store) : config_(config), store_(store) {}
+LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner,
+                               const CallMetrics* metrics)
+    : config_(config), store_(store), runner_(runner), metrics_(metrics) {}
 
-grpc::Status LmdServiceImpl::InsertMaps(grpc::ServerContext*, const v1::InsertMapsRequest* request,
-                                        v1::InsertMapsResponse* response) {
-  if (request->maps_size() == 0) return ToGrpcStatus(Status::InvalidArgument("the request holds no maps"));
-  if (static_cast<uint32_t>(request->maps_size()) > config_.max_maps_per_batch) {
-    return ToGrpcStatus(Status::InvalidArgument(std::to_string(request->maps_size()) +
-                                                " maps exceed max_maps_per_batch (" +
-                                                std::to_string(config_.max_maps_per_batch) + ")"));
-  }
+double LmdServiceImpl::uptime_s() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+}
+
+Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
+                              v1::InsertMapsResponse* response) {
   std::vector<v1::StoredMap> maps;
-  maps.reserve(request->maps_size());
-  for (int i = 0; i < request->maps_size(); ++i) {
-    Status valid = ValidateInsert(request->maps(i), config_, i);
-    if (!valid.ok()) return ToGrpcStatus(valid);
-    maps.push_back(ToStoredMap(request->maps(i)));
+  maps.reserve(requests.size());
+  for (size_t i = 0; i < requests.size(); ++i) {
+    Status valid = ValidateInsert(*requests[i], config_, first_index + i);
+    if (!valid.ok()) return valid;
+    v1::StoredMap stored;
+    *stored.mutable_metadata() = requests[i]->metadata();
+    *stored.mutable_map() = requests[i]->map();
+    maps.push_back(std::move(stored));
   }
   Status stored = store_->InsertMaps(&maps, config_.max_collections);
-  if (!stored.ok()) return ToGrpcStatus(stored);
+  if (!stored.ok()) return stored;
   for (const v1::StoredMap& map : maps) *response->add_maps() = map.metadata();
-  spdlog::debug("InsertMaps: stored {} maps", maps.size());
-  return grpc::Status::OK;
+  return Status::Ok();
 }
 
-grpc::Status LmdServiceImpl::StreamInsertMaps(grpc::ServerContext*, grpc::ServerReader<v1::InsertMapRequest>* reader,
-                                              v1::InsertMapsResponse* response) {
-  v1::InsertMapRequest request;
-  for (size_t index = 0; reader->Read(&request); ++index) {
-    Status status = ValidateInsert(request, config_, index);
-    std::vector<v1::StoredMap> maps = {ToStoredMap(request)};
-    if (status.ok()) status = store_->InsertMaps(&maps, config_.max_collections);
-    if (!status.ok()) return ToGrpcStatus(status);
-    *response->add_maps() = maps.front().metadata();
+grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext* context,
+                                                     const v1::InsertMapsRequest* request,
+                                                     v1::InsertMapsResponse* response) {
+  // Every collection of the batch needs write access.
+  Status allowed = runner_->auth().Authenticate(CallRunner::Authorization(context));
+  for (const auto& map : request->maps()) {
+    if (allowed.ok()) allowed = runner_->Authorize(context, map.metadata().collection(), Access::kWrite);
   }
-  return grpc::Status::OK;
-}
-
-grpc::Status LmdServiceImpl::GetMap(grpc::ServerContext*, const v1::GetMapRequest* request,
-                                    v1::GetMapResponse* response) {
-  Status valid = ValidateKey(request->collection(), request->map_id());
-  if (!valid.ok()) return ToGrpcStatus(valid);
-  Result<v1::StoredMap> map = store_->GetMap(request->collection(), request->map_id());
-  if (!map.ok()) return ToGrpcStatus(map.status());
-  *response->mutable_map() = std::move(map).value();
-  return grpc::Status::OK;
-}
-
-grpc::Status LmdServiceImpl::DeleteMap(grpc::ServerContext*, const v1::DeleteMapRequest* request,
-                                       v1::DeleteMapResponse*) {
-  Status status = ValidateKey(request->collection(), request->map_id());
-  if (status.ok()) status = store_->DeleteMap(request->collection(), request->map_id());
-  return ToGrpcStatus(status);
-}
-
-grpc::Status LmdServiceImpl::ListMaps(grpc::ServerContext*, const v1::ListMapsRequest* request,
-                                      v1::ListMapsResponse* response) {
-  Status status = ValidateCollectionName(request->collection());
-  if (status.ok() && !request->page_token().empty()) status = ValidateMapId(request->page_token(), false);
-  if (!status.ok()) return ToGrpcStatus(status);
-  const uint32_t page_size = request->page_size() == 0 ? kDefaultPageSize
-                                                       : std::min(request->page_size(), 10 * kDefaultPageSize);
-  std::vector<v1::MapMetadata> maps;
-  std::string next;
-  status = store_->ListMaps(request->collection(), request->page_token(), page_size, &maps, &next);
-  if (!status.ok()) return ToGrpcStatus(status);
-  for (auto& meta : maps) *response->add_maps() = std::move(meta);
-  response->set_next_page_token(next);
-  return grpc::Status::OK;
-}
-
-grpc::Status LmdServiceImpl::ListCollections(grpc::ServerContext*, const v1::ListCollectionsRequest*,
-                                             v1::ListCollectionsResponse* response) {
-  for (auto& info : store_->ListCollections()) *response->add_collections() = std::move(info);
-  return grpc::Status::OK;
-}
-
-grpc::Status LmdServiceImpl::Stats(grpc::ServerContext*, const v1::StatsRequest* request,
-                                   v1::StatsResponse* response) {
-  if (!request->collection().empty() && !store_->HasCollection(request->collection())) {
-    return ToGrpcStatus(Status::NotFound("unknown collection '" + request->collection() + "'"));
-  }
-  for (auto& info : store_->ListCollections()) {
-    if (request->collection().empty() || info.name() == request->collection()) {
-      *response->add_collections() = std::move(info);
+  return runner_->Unary(context, "InsertMaps", BatchCollection(*request), allowed, [=] {
+    if (request->maps_size() == 0) return Status::InvalidArgument("the request holds no maps");
+    if (static_cast<uint32_t>(request->maps_size()) > config_.max_maps_per_batch) {
+      return Status::InvalidArgument(std::to_string(request->maps_size()) + " maps exceed max_maps_per_batch (" +
+                                     std::to_string(config_.max_maps_per_batch) + ")");
     }
-  }
-  response->set_uptime_s(std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count());
-  response->set_version(LMD_VERSION);
-  return grpc::Status::OK;
+    std::vector<const v1::InsertMapRequest*> maps;
+    for (const auto& map : request->maps()) maps.push_back(&map);
+    return Insert(maps, 0, response);
+  });
+}
+
+grpc::ServerReadReactor<v1::InsertMapRequest>* LmdServiceImpl::StreamInsertMaps(grpc::CallbackServerContext* context,
+                                                                                 v1::InsertMapsResponse* response) {
+  return new StreamInsertReactor(context, response, this, runner_);
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::GetMap(grpc::CallbackServerContext* context,
+                                                 const v1::GetMapRequest* request, v1::GetMapResponse* response) {
+  return runner_->Unary(context, "GetMap", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    Status valid = ValidateKey(request->collection(), request->map_id());
+    if (!valid.ok()) return valid;
+    Result<v1::StoredMap> map = store_->GetMap(request->collection(), request->map_id());
+    if (!map.ok()) return map.status();
+    *response->mutable_map() = std::move(map).value();
+    return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::DeleteMap(grpc::CallbackServerContext* context,
+                                                    const v1::DeleteMapRequest* request, v1::DeleteMapResponse*) {
+  return runner_->Unary(context, "DeleteMap", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kWrite), [=] {
+    Status status = ValidateKey(request->collection(), request->map_id());
+    return status.ok() ? store_->DeleteMap(request->collection(), request->map_id()) : status;
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::ListMaps(grpc::CallbackServerContext* context,
+                                                   const v1::ListMapsRequest* request,
+                                                   v1::ListMapsResponse* response) {
+  return runner_->Unary(context, "ListMaps", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    Status status = ValidateCollectionName(request->collection());
+    if (status.ok() && !request->page_token().empty()) status = ValidateMapId(request->page_token(), false);
+    if (!status.ok()) return status;
+    const uint32_t page_size =
+        request->page_size() == 0 ? kDefaultPageSize : std::min(request->page_size(), 10 * kDefaultPageSize);
+    std::vector<v1::MapMetadata> maps;
+    std::string next;
+    status = store_->ListMaps(request->collection(), request->page_token(), page_size, &maps, &next);
+    if (!status.ok()) return status;
+    for (auto& meta : maps) *response->add_maps() = std::move(meta);
+    response->set_next_page_token(next);
+    return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::ListCollections(grpc::CallbackServerContext* context,
+                                                          const v1::ListCollectionsRequest*,
+                                                          v1::ListCollectionsResponse* response) {
+  // Any known token may list; it sees only the collections it may read.
+  const std::string authorization = CallRunner::Authorization(context);
+  return runner_->Unary(context, "ListCollections", "", runner_->auth().Authenticate(authorization), [=] {
+    for (auto& info : store_->ListCollections()) {
+      if (runner_->auth().CanRead(authorization, info.name())) *response->add_collections() = std::move(info);
+    }
+    return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::Stats(grpc::CallbackServerContext* context,
+                                                const v1::StatsRequest* request, v1::StatsResponse* response) {
+  return runner_->Unary(context, "Stats", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    if (!request->collection().empty() && !store_->HasCollection(request->collection())) {
+      return Status::NotFound("unknown collection '" + request->collection() + "'");
+    }
+    for (auto& info : store_->ListCollections()) {
+      if (request->collection().empty() || info.name() == request->collection()) {
+        *response->add_collections() = std::move(info);
+      }
+    }
+    for (auto& method : metrics_->Snapshot()) *response->add_methods() = std::move(method);
+    response->set_uptime_s(uptime_s());
+    response->set_version(LMD_VERSION);
+    return Status::Ok();
+  });
 }
 
 }  // namespace lmd::server

@@ -1,41 +1,54 @@
-// The gRPC service: one handler per RPC, each translating the wire message,
-// calling the store (and, later, the method in core), and translating back.
+// The gRPC service (callback API): one handler per RPC. Each handler names
+// the collection and access it needs and hands a few lines of work to the
+// CallRunner (auth, worker pool, deadline, metrics); the work translates the
+// wire message, calls the store, and translates back.
 #pragma once
 
 #include <chrono>
 #include <string>
 
 #include "lmd/v1/lmd.grpc.pb.h"
+#include "server/call_runner.h"
 #include "server/config.h"
 #include "server/map_store.h"
 
 namespace lmd::server {
 
-class LmdServiceImpl final : public v1::LmdService::Service {
+class LmdServiceImpl final : public v1::LmdService::CallbackService {
  public:
-  // `store` must outlive the service.
-  LmdServiceImpl(const ServerConfig& config, MapStore* store);
+  // `store`, `runner` and `metrics` must outlive the service.
+  LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner, const CallMetrics* metrics);
 
-  grpc::Status InsertMaps(grpc::ServerContext* context, const v1::InsertMapsRequest* request,
-                          v1::InsertMapsResponse* response) override;
-  grpc::Status StreamInsertMaps(grpc::ServerContext* context, grpc::ServerReader<v1::InsertMapRequest>* reader,
-                                v1::InsertMapsResponse* response) override;
-  grpc::Status GetMap(grpc::ServerContext* context, const v1::GetMapRequest* request,
-                      v1::GetMapResponse* response) override;
-  grpc::Status DeleteMap(grpc::ServerContext* context, const v1::DeleteMapRequest* request,
-                         v1::DeleteMapResponse* response) override;
-  grpc::Status ListMaps(grpc::ServerContext* context, const v1::ListMapsRequest* request,
-                        v1::ListMapsResponse* response) override;
-  grpc::Status ListCollections(grpc::ServerContext* context, const v1::ListCollectionsRequest* request,
-                               v1::ListCollectionsResponse* response) override;
-  grpc::Status Stats(grpc::ServerContext* context, const v1::StatsRequest* request,
-                     v1::StatsResponse* response) override;
+  grpc::ServerUnaryReactor* InsertMaps(grpc::CallbackServerContext* context, const v1::InsertMapsRequest* request,
+                                       v1::InsertMapsResponse* response) override;
+  grpc::ServerReadReactor<v1::InsertMapRequest>* StreamInsertMaps(grpc::CallbackServerContext* context,
+                                                                  v1::InsertMapsResponse* response) override;
+  grpc::ServerUnaryReactor* GetMap(grpc::CallbackServerContext* context, const v1::GetMapRequest* request,
+                                   v1::GetMapResponse* response) override;
+  grpc::ServerUnaryReactor* DeleteMap(grpc::CallbackServerContext* context, const v1::DeleteMapRequest* request,
+                                      v1::DeleteMapResponse* response) override;
+  grpc::ServerUnaryReactor* ListMaps(grpc::CallbackServerContext* context, const v1::ListMapsRequest* request,
+                                     v1::ListMapsResponse* response) override;
+  grpc::ServerUnaryReactor* ListCollections(grpc::CallbackServerContext* context,
+                                            const v1::ListCollectionsRequest* request,
+                                            v1::ListCollectionsResponse* response) override;
+  grpc::ServerUnaryReactor* Stats(grpc::CallbackServerContext* context, const v1::StatsRequest* request,
+                                  v1::StatsResponse* response) override;
   // Retrieve, DetectChanges and Backup answer UNIMPLEMENTED (the base class)
-  // until the index lands.
+  // until they land.
+
+  // Validates and stores one batch (also used per message by the stream).
+  Status Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
+                v1::InsertMapsResponse* response);
+
+  const ServerConfig& config() const { return config_; }
+  double uptime_s() const;
 
  private:
   const ServerConfig config_;
   MapStore* const store_;
+  CallRunner* const runner_;
+  const CallMetrics* const metrics_;
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
 };
 

@@ -1,28 +1,91 @@
 #include "server/server.h"
 
+#include <fstream>
+#include <sstream>
+#include <thread>
+
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server.h>
 #include <grpcpp/server_builder.h>
 #include <spdlog/spdlog.h>
 
 #include "grpc/health/v1/health.pb.h"
+#include "server/auth.h"
+#include "server/call_runner.h"
 #include "server/lmd_service.h"
 #include "server/map_store.h"
+#include "server/metrics.h"
+#include "server/metrics_http.h"
+#include "server/worker_pool.h"
 
 namespace lmd::server {
+namespace {
+
+Result<std::string> ReadFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) return Status::InvalidArgument("cannot read " + what + " " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Plain-text credentials, or TLS when a certificate and key are configured.
+Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerConfig& config) {
+  if (config.tls_cert_file.empty() != config.tls_key_file.empty()) {
+    return Status::InvalidArgument("TLS needs both tls_cert_file and tls_key_file");
+  }
+  if (config.tls_cert_file.empty()) {
+    if (!config.tls_client_ca_file.empty()) return Status::InvalidArgument("tls_client_ca_file needs tls_cert_file");
+    return grpc::InsecureServerCredentials();
+  }
+  Result<std::string> cert = ReadFile(config.tls_cert_file, "tls_cert_file");
+  if (!cert.ok()) return cert.status();
+  Result<std::string> key = ReadFile(config.tls_key_file, "tls_key_file");
+  if (!key.ok()) return key.status();
+  grpc::SslServerCredentialsOptions options(GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
+  options.pem_key_cert_pairs.push_back({*key, *cert});
+  if (!config.tls_client_ca_file.empty()) {
+    Result<std::string> ca = ReadFile(config.tls_client_ca_file, "tls_client_ca_file");
+    if (!ca.ok()) return ca.status();
+    options.pem_root_certs = *ca;
+    options.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+  }
+  return grpc::SslServerCredentials(options);
+}
+
+}  // namespace
+
+LmdServer::LmdServer() = default;
 
 Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) {
-  if (!IsLoopbackAddress(config.listen) && !config.allow_insecure_remote) {
+  const bool secured = !config.tls_cert_file.empty() && !config.tokens_file.empty();
+  if (!IsLoopbackAddress(config.listen) && !secured && !config.allow_insecure_remote) {
     return Status::InvalidArgument("refusing to serve on " + config.listen +
-                                   " without TLS and tokens; listen on loopback or set allow_insecure_remote");
+                                   " without TLS and tokens; listen on loopback, configure tls_cert_file and "
+                                   "tokens_file, or set allow_insecure_remote");
+  }
+  Result<std::shared_ptr<grpc::ServerCredentials>> credentials = MakeCredentials(config);
+  if (!credentials.ok()) return credentials.status();
+
+  std::unique_ptr<LmdServer> server(new LmdServer());
+  server->auth_ = std::make_unique<TokenAuthorizer>();
+  if (!config.tokens_file.empty()) {
+    Result<TokenAuthorizer> auth = TokenAuthorizer::LoadFile(config.tokens_file);
+    if (!auth.ok()) return auth.status();
+    *server->auth_ = std::move(auth).value();
   }
   Result<std::unique_ptr<MapStore>> store = MapStore::Open({config.data_dir, config.sync_writes});
   if (!store.ok()) return store.status();
-
-  std::unique_ptr<LmdServer> server(new LmdServer());
   server->store_ = std::move(store).value();
-  server->service_ = std::make_unique<LmdServiceImpl>(config, server->store_.get());
+
+  const size_t threads = config.worker_threads ? config.worker_threads : std::thread::hardware_concurrency();
+  server->metrics_ = std::make_unique<CallMetrics>();
+  server->pool_ = std::make_unique<WorkerPool>(threads, config.max_queued_calls);
+  server->runner_ = std::make_unique<CallRunner>(server->pool_.get(), server->auth_.get(), server->metrics_.get());
+  server->service_ = std::make_unique<LmdServiceImpl>(config, server->store_.get(), server->runner_.get(),
+                                                      server->metrics_.get());
 
   // Reflection serves descriptors from the generated pool; the built-in health
   // service has none, so its messages are linked in from lmd_proto here.
@@ -31,7 +94,7 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
 
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(config.listen, grpc::InsecureServerCredentials(), &server->port_);
+  builder.AddListeningPort(config.listen, *credentials, &server->port_);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   builder.RegisterService(server->service_.get());
@@ -41,20 +104,40 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
     return Status::Internal("cannot listen on " + config.listen);
   }
   server->server_->GetHealthCheckService()->SetServingStatus(true);
-  spdlog::info("lmdd serving on port {} (data dir {})", server->port_, config.data_dir);
+
+  if (!config.metrics_listen.empty()) {
+    const LmdServiceImpl* service = server->service_.get();
+    const MapStore* store_ptr = server->store_.get();
+    const CallMetrics* metrics = server->metrics_.get();
+    Result<std::unique_ptr<MetricsHttpServer>> http = MetricsHttpServer::Start(config.metrics_listen, [=] {
+      return metrics->PrometheusText(store_ptr->ListCollections(), service->uptime_s());
+    });
+    if (!http.ok()) {
+      server->Shutdown(std::chrono::milliseconds(0));
+      return http.status();
+    }
+    server->metrics_http_ = std::move(http).value();
+  }
+  spdlog::info("lmdd serving on port {} ({}, tokens {}, {} worker threads, data dir {})", server->port_,
+               config.tls_cert_file.empty() ? "plaintext" : "TLS", server->auth_->enabled() ? "on" : "off", threads,
+               config.data_dir);
   return server;
 }
 
 LmdServer::~LmdServer() { Shutdown(); }
 
+int LmdServer::metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }
+
 void LmdServer::Wait() { server_->Wait(); }
 
 void LmdServer::Shutdown(std::chrono::milliseconds grace) {
-  if (stopped_) return;
+  if (stopped_ || !server_) return;
   stopped_ = true;
   spdlog::info("lmdd shutting down (grace {} ms)", grace.count());
   server_->GetHealthCheckService()->SetServingStatus(false);
   server_->Shutdown(std::chrono::system_clock::now() + grace);
+  metrics_http_.reset();
+  pool_.reset();  // runs what is queued, joins the workers
   Status closed = store_->Close();
   if (!closed.ok()) spdlog::error("{}", closed.ToString());
   spdlog::info("lmdd stopped");

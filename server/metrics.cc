@@ -1,0 +1,97 @@
+#include "server/metrics.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace lmd::server {
+namespace {
+
+const char* CodeName(int code) {
+  static const char* const kNames[] = {"OK", "CANCELLED", "UNKNOWN", "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
+                                       "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
+                                       "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED",
+                                       "INTERNAL", "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  return code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
+}
+
+// Bounds of the Prometheus histogram, seconds.
+constexpr double kPrometheusBoundsS[] = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
+                                         0.1,    0.25,  0.5,    1.0,   2.5,  5.0,   10.0};
+
+}  // namespace
+
+double CallMetrics::BucketBoundMs(int i) { return kFirstBoundMs * std::pow(1.1, i); }
+
+void CallMetrics::Record(const std::string& method, int code, double latency_ms) {
+  int bucket = latency_ms <= kFirstBoundMs ? 0 : static_cast<int>(std::ceil(std::log(latency_ms / kFirstBoundMs) / std::log(1.1)));
+  if (bucket >= kBuckets) bucket = kBuckets - 1;
+  std::lock_guard<std::mutex> lock(mutex_);
+  Method& m = methods_[method];
+  ++m.calls;
+  ++m.by_code[code];
+  m.total_ms += latency_ms;
+  ++m.buckets[bucket];
+}
+
+double CallMetrics::Percentile(const Method& method, double q) {
+  const double wanted = q * static_cast<double>(method.calls);
+  uint64_t seen = 0;
+  for (int i = 0; i < kBuckets; ++i) {
+    seen += method.buckets[i];
+    if (static_cast<double>(seen) >= wanted && seen > 0) return BucketBoundMs(i);
+  }
+  return 0.0;
+}
+
+std::vector<v1::MethodStats> CallMetrics::Snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<v1::MethodStats> out;
+  for (const auto& [name, m] : methods_) {
+    v1::MethodStats stats;
+    stats.set_method(name);
+    stats.set_calls(m.calls);
+    const auto ok = m.by_code.find(0);
+    stats.set_errors(m.calls - (ok == m.by_code.end() ? 0 : ok->second));
+    stats.set_p50_ms(Percentile(m, 0.50));
+    stats.set_p95_ms(Percentile(m, 0.95));
+    stats.set_p99_ms(Percentile(m, 0.99));
+    out.push_back(std::move(stats));
+  }
+  return out;
+}
+
+std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s) const {
+  std::ostringstream out;
+  out << "# HELP lmd_uptime_seconds Seconds since lmdd started.\n# TYPE lmd_uptime_seconds gauge\n"
+      << "lmd_uptime_seconds " << uptime_s << "\n";
+  out << "# HELP lmd_collection_maps Stored maps per collection.\n# TYPE lmd_collection_maps gauge\n";
+  for (const auto& c : collections) out << "lmd_collection_maps{collection=\"" << c.name() << "\"} " << c.maps() << "\n";
+  out << "# HELP lmd_collection_postings Index postings per collection.\n# TYPE lmd_collection_postings gauge\n";
+  for (const auto& c : collections) {
+    out << "lmd_collection_postings{collection=\"" << c.name() << "\"} " << c.postings() << "\n";
+  }
+  out << "# HELP lmd_collection_points Stored points per collection.\n# TYPE lmd_collection_points gauge\n";
+  for (const auto& c : collections) out << "lmd_collection_points{collection=\"" << c.name() << "\"} " << c.points() << "\n";
+
+  std::lock_guard<std::mutex> lock(mutex_);
+  out << "# HELP lmd_calls_total Finished gRPC calls by method and status code.\n# TYPE lmd_calls_total counter\n";
+  for (const auto& [name, m] : methods_) {
+    for (const auto& [code, count] : m.by_code) {
+      out << "lmd_calls_total{method=\"" << name << "\",code=\"" << CodeName(code) << "\"} " << count << "\n";
+    }
+  }
+  out << "# HELP lmd_call_duration_seconds Latency of gRPC calls.\n# TYPE lmd_call_duration_seconds histogram\n";
+  for (const auto& [name, m] : methods_) {
+    for (double bound_s : kPrometheusBoundsS) {
+      uint64_t count = 0;  // fine buckets wholly below the bound
+      for (int i = 0; i < kBuckets && BucketBoundMs(i) <= bound_s * 1000.0 * (1 + 1e-9); ++i) count += m.buckets[i];
+      out << "lmd_call_duration_seconds_bucket{method=\"" << name << "\",le=\"" << bound_s << "\"} " << count << "\n";
+    }
+    out << "lmd_call_duration_seconds_bucket{method=\"" << name << "\",le=\"+Inf\"} " << m.calls << "\n";
+    out << "lmd_call_duration_seconds_sum{method=\"" << name << "\"} " << m.total_ms / 1000.0 << "\n";
+    out << "lmd_call_duration_seconds_count{method=\"" << name << "\"} " << m.calls << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace lmd::server

@@ -1,0 +1,48 @@
+// Call metrics: per RPC method, calls, errors by status code and a latency
+// histogram; exported to the Stats call and as Prometheus text.
+// Thread-safe (one mutex; recording is a few increments).
+#pragma once
+
+#include <array>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "lmd/v1/lmd.pb.h"
+
+namespace lmd::server {
+
+class CallMetrics {
+ public:
+  // Records one finished call. `code` is the gRPC status code (0 = OK).
+  void Record(const std::string& method, int code, double latency_ms);
+
+  // Calls, errors and latency percentiles per method, by method name.
+  // Percentiles are bucket upper bounds: within 10 % of the true value.
+  std::vector<v1::MethodStats> Snapshot() const;
+
+  // Prometheus text exposition (version 0.0.4) of the calls and of
+  // `collections` (maps, points, postings per collection).
+  std::string PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s) const;
+
+ private:
+  // Latency buckets grow by 10 %: bucket i holds latencies up to
+  // kFirstBoundMs * 1.1^i; the last bucket holds everything larger.
+  static constexpr int kBuckets = 200;
+  static constexpr double kFirstBoundMs = 0.01;
+  static double BucketBoundMs(int i);
+
+  struct Method {
+    uint64_t calls = 0;
+    std::map<int, uint64_t> by_code;
+    double total_ms = 0.0;
+    std::array<uint64_t, kBuckets> buckets{};
+  };
+  static double Percentile(const Method& method, double q);
+
+  mutable std::mutex mutex_;
+  std::map<std::string, Method> methods_;  // guarded by mutex_
+};
+
+}  // namespace lmd::server

@@ -1,0 +1,44 @@
+#include "server/stream_insert.h"
+
+#include "server/grpc_status.h"
+#include "server/lmd_service.h"
+
+namespace lmd::server {
+
+StreamInsertReactor::StreamInsertReactor(grpc::CallbackServerContext* context, v1::InsertMapsResponse* response,
+                                         LmdServiceImpl* service, CallRunner* runner)
+    : context_(context),
+      response_(response),
+      service_(service),
+      runner_(runner),
+      authorization_(CallRunner::Authorization(context)),
+      request_id_(runner->RequestId(context)) {
+  StartRead(&request_);
+}
+
+void StreamInsertReactor::OnReadDone(bool ok) {
+  if (!ok) {  // the client finished the stream (or the call was cancelled)
+    Done(context_->IsCancelled() ? Status::Cancelled("call cancelled") : Status::Ok());
+    return;
+  }
+  if (!runner_->pool().TrySubmit([this] { Store(); })) {
+    Done(Status::ResourceExhausted("server busy: max_queued_calls calls are already waiting; retry later"));
+  }
+}
+
+void StreamInsertReactor::Store() {
+  Status status = runner_->auth().Check(authorization_, request_.metadata().collection(), Access::kWrite);
+  if (status.ok()) status = service_->Insert({&request_}, index_, response_);
+  if (!status.ok()) return Done(status);
+  ++index_;
+  StartRead(&request_);
+}
+
+void StreamInsertReactor::Done(const Status& status) {
+  const grpc::Status result = ToGrpcStatus(status);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+  runner_->Finished("StreamInsertMaps", request_id_, "", result, ms);
+  Finish(result);
+}
+
+}  // namespace lmd::server

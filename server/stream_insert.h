@@ -1,0 +1,43 @@
+// StreamInsertReactor: the client-streaming insert. Each message is one map:
+// authorized, validated and written on the worker pool, one at a time and in
+// stream order, before the next message is read. The first failure ends the
+// call with its status; maps written before it stay stored and are listed in
+// the response.
+#pragma once
+
+#include <chrono>
+#include <string>
+
+#include <grpcpp/support/server_callback.h>
+
+#include "lmd/v1/lmd.pb.h"
+#include "server/call_runner.h"
+
+namespace lmd::server {
+
+class LmdServiceImpl;
+
+class StreamInsertReactor : public grpc::ServerReadReactor<v1::InsertMapRequest> {
+ public:
+  StreamInsertReactor(grpc::CallbackServerContext* context, v1::InsertMapsResponse* response,
+                      LmdServiceImpl* service, CallRunner* runner);
+
+  void OnReadDone(bool ok) override;
+  void OnDone() override { delete this; }
+
+ private:
+  void Store();  // runs on the worker pool
+  void Done(const Status& status);
+
+  grpc::CallbackServerContext* const context_;
+  v1::InsertMapsResponse* const response_;
+  LmdServiceImpl* const service_;
+  CallRunner* const runner_;
+  const std::string authorization_;
+  const std::string request_id_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  v1::InsertMapRequest request_;
+  size_t index_ = 0;
+};
+
+}  // namespace lmd::server
