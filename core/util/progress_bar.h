@@ -1,0 +1,40 @@
+// ProgressBar: shows how far a long job is (ingesting a log, building an
+// index, running an evaluation) on a stream the program chooses, normally
+// stderr. On a terminal it redraws one line; elsewhere (CI logs, pipes) it
+// prints a line at every 10 % so logs stay short.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdio>
+#include <string>
+
+namespace lmd {
+
+class ProgressBar {
+ public:
+  // `total` steps of `what` (e.g. "maps"), drawn on `out`.
+  ProgressBar(std::string label, size_t total, std::FILE* out = stderr);
+  ~ProgressBar();  // finishes the line if Done was not called
+
+  // Sets the number of steps done (clamped to total) and redraws if needed.
+  void Update(size_t done);
+  void Add(size_t steps = 1) { Update(done_ + steps); }
+  // Draws the final state and ends the line. Idempotent.
+  void Done();
+
+ private:
+  void Draw(bool final_draw);
+
+  const std::string label_;
+  const size_t total_;
+  std::FILE* const out_;
+  const bool terminal_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_draw_{};
+  size_t done_ = 0;
+  int last_decile_ = -1;
+  bool finished_ = false;
+};
+
+}  // namespace lmd
