@@ -1,0 +1,270 @@
+#include "core/index/index.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/index/top_hits.h"
+
+namespace lmd {
+namespace {
+
+constexpr uint32_t kNoSlot = std::numeric_limits<uint32_t>::max();
+
+// Per-thread counters indexed by slot, kept all-zero between queries.
+struct RetrieveScratch {
+  std::vector<uint32_t> counts;   // 4 per slot (kLmd bound) or 1 per slot (kBow)
+  std::vector<uint32_t> touched;
+  std::vector<uint32_t> word_touched;
+  std::vector<uint32_t> word_counts;
+  KernelScratch kernel;
+};
+
+RetrieveScratch& Scratch() {
+  thread_local RetrieveScratch scratch;
+  return scratch;
+}
+
+bool InInt16(int32_t v) { return v >= -32768 && v <= 32767; }
+
+}  // namespace
+
+Index::Index(const IndexOptions& options) : options_(options) {
+  cell0_ = static_cast<int32_t>(std::lround(options.pyramid_cell_m / options.pose_quantum_m));
+}
+
+Result<Index> Index::Create(const IndexOptions& options) {
+  Status st = ValidateIndexOptions(options);
+  if (!st.ok()) return st;
+  return Index(options);
+}
+
+uint64_t Index::PostingKey(uint32_t word, int32_t cx, int32_t cy) {
+  return (static_cast<uint64_t>(word) << 32) | (static_cast<uint64_t>(static_cast<uint16_t>(cx)) << 16) |
+         static_cast<uint64_t>(static_cast<uint16_t>(cy));
+}
+
+Status Index::Add(uint64_t id, const Lmd& lmd) {
+  if (Contains(id)) return Status::AlreadyExists("map " + std::to_string(id) + " is already indexed");
+  auto features = ToPoseFeatures(lmd, options_);
+  if (!features.ok()) return features.status();
+  return AddPoseFeatures(id, std::move(features).value());
+}
+
+Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
+  if (Contains(id)) return Status::AlreadyExists("map " + std::to_string(id) + " is already indexed");
+  for (size_t i = 0; i < features.size(); ++i) {
+    if (features[i].word > kMaxAppearanceWord)
+      return Status::InvalidArgument("appearance word exceeds 65535");
+    if (i > 0) {
+      const PoseFeature& a = features[i - 1];
+      const PoseFeature& b = features[i];
+      if (a.word > b.word || (a.word == b.word && (a.x > b.x || (a.x == b.x && a.y > b.y))))
+        return Status::InvalidArgument("pose features are not sorted by (word, x, y)");
+    }
+  }
+  uint32_t slot;
+  if (!free_slots_.empty()) {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+  } else {
+    slot = static_cast<uint32_t>(slot_id_.size());
+    slot_id_.push_back(0);
+    slot_used_.push_back(0);
+    slot_features_.emplace_back();
+  }
+  for (const PoseFeature& f : features) {
+    const uint64_t key = PostingKey(f.word, FloorDiv(f.x, cell0_), FloorDiv(f.y, cell0_));
+    auto [it, inserted] = lists_.try_emplace(key);
+    if (inserted) word_keys_[f.word].push_back(key);
+    it->second.push_back({slot, f.x, f.y});
+  }
+  posting_count_ += features.size();
+  slot_id_[slot] = id;
+  slot_used_[slot] = 1;
+  slot_features_[slot] = std::move(features);
+  id_to_slot_[id] = slot;
+  return Status::Ok();
+}
+
+bool Index::Remove(uint64_t id) {
+  auto found = id_to_slot_.find(id);
+  if (found == id_to_slot_.end()) return false;
+  const uint32_t slot = found->second;
+  std::vector<PoseFeature>& features = slot_features_[slot];
+  for (size_t i = 0; i < features.size(); ++i) {
+    const PoseFeature& f = features[i];
+    const uint64_t key = PostingKey(f.word, FloorDiv(f.x, cell0_), FloorDiv(f.y, cell0_));
+    if (i > 0 && key == PostingKey(features[i - 1].word, FloorDiv(features[i - 1].x, cell0_),
+                                   FloorDiv(features[i - 1].y, cell0_)))
+      continue;  // this list was already cleaned
+    auto it = lists_.find(key);
+    if (it == lists_.end()) continue;
+    auto& list = it->second;
+    list.erase(std::remove_if(list.begin(), list.end(), [slot](const Posting& p) { return p.slot == slot; }),
+               list.end());
+    if (list.empty()) {
+      lists_.erase(it);
+      auto& keys = word_keys_[f.word];
+      keys.erase(std::find(keys.begin(), keys.end(), key));
+      if (keys.empty()) word_keys_.erase(f.word);
+    }
+  }
+  posting_count_ -= features.size();
+  features = std::vector<PoseFeature>();
+  slot_used_[slot] = 0;
+  free_slots_.push_back(slot);
+  id_to_slot_.erase(found);
+  return true;
+}
+
+size_t Index::CountPostingsOfMap(uint64_t id) const {
+  auto found = id_to_slot_.find(id);
+  if (found == id_to_slot_.end()) {
+    return 0;
+  }
+  size_t n = 0;
+  for (const auto& kv : lists_)
+    for (const Posting& p : kv.second) n += p.slot == found->second;
+  return n;
+}
+
+size_t Index::MemoryBytes() const {
+  constexpr size_t kNode = 48;  // rough per-entry cost of an unordered_map node + bucket
+  size_t bytes = 0;
+  for (const auto& kv : lists_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(Posting);
+  for (const auto& kv : word_keys_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(uint64_t);
+  for (const auto& f : slot_features_) bytes += sizeof(f) + f.capacity() * sizeof(PoseFeature);
+  bytes += id_to_slot_.size() * kNode + slot_id_.capacity() * (sizeof(uint64_t) + 1);
+  return bytes;
+}
+
+void Index::ForEachMap(const std::function<void(uint64_t, const std::vector<PoseFeature>&)>& fn) const {
+  for (size_t s = 0; s < slot_id_.size(); ++s)
+    if (slot_used_[s]) fn(slot_id_[s], slot_features_[s]);
+}
+
+Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOptions& options) const {
+  Status st = ValidateRetrieveOptions(options);
+  if (!st.ok()) return st;
+  auto features = ToPoseFeatures(query, options_);
+  if (!features.ok()) return features.status();
+  const PreparedQuery q = PrepareQuery(std::move(features).value(), options_, options);
+  if (options.method == Method::kBow) return RetrieveBow(q, options.top_k);
+  return RetrieveLmd(q, options.top_k);
+}
+
+std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k) const {
+  RetrieveScratch& sc = Scratch();
+  if (sc.counts.size() < slot_id_.size() * 4) sc.counts.resize(slot_id_.size() * 4, 0);
+  sc.touched.clear();
+  uint32_t* counts = sc.counts.data();
+  const int32_t box = q.max_offset;
+  const size_t nq = q.features.size();
+  // Pass 1: per orientation and query feature, count the maps holding its word
+  // in a level-0 cell that meets the offset box (one count per map and cell).
+  for (int o = 0; o < 4; ++o) {
+    for (size_t i = 0; i < nq; ++i) {
+      const uint32_t word = q.features[i].word;
+      const int32_t x = q.rx[o][i], y = q.ry[o][i];
+      const int32_t cx0 = FloorDiv(x - box, cell0_), cx1 = FloorDiv(x + box, cell0_);
+      const int32_t cy0 = FloorDiv(y - box, cell0_), cy1 = FloorDiv(y + box, cell0_);
+      for (int32_t cx = cx0; cx <= cx1; ++cx) {
+        for (int32_t cy = cy0; cy <= cy1; ++cy) {
+          if (!InInt16(cx) || !InInt16(cy)) continue;
+          auto it = lists_.find(PostingKey(word, cx, cy));
+          if (it == lists_.end()) continue;
+          uint32_t previous = kNoSlot;
+          for (const Posting& p : it->second) {
+            if (p.slot == previous) continue;  // a map's postings in one list are adjacent
+            previous = p.slot;
+            uint32_t* c = counts + 4 * static_cast<size_t>(p.slot);
+            if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(p.slot);
+            ++c[o];
+          }
+        }
+      }
+    }
+  }
+  // Upper bound of each touched map's score (pyramid_kernel.h), counters reset.
+  struct Candidate {
+    double bound;
+    uint64_t id;
+    uint32_t slot;
+  };
+  std::vector<Candidate> heap;
+  heap.reserve(sc.touched.size());
+  for (uint32_t slot : sc.touched) {
+    uint32_t* c = counts + 4 * static_cast<size_t>(slot);
+    const size_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
+    c[0] = c[1] = c[2] = c[3] = 0;
+    const size_t nd = slot_features_[slot].size();
+    const double bound = NormalizeScore(static_cast<double>(std::min(best, std::min(nq, nd))), nq, nd,
+                                        q.normalization);
+    heap.push_back({bound, slot_id_[slot], slot});
+  }
+  auto lower = [](const Candidate& a, const Candidate& b) {
+    if (a.bound != b.bound) return a.bound < b.bound;
+    return a.id > b.id;
+  };
+  std::make_heap(heap.begin(), heap.end(), lower);
+  // Pass 2: exact scores, best bound first, until no bound can reach the top k.
+  TopHits top(top_k);
+  while (!heap.empty()) {
+    const Candidate next = heap.front();
+    if (top.full() && next.bound < top.kth_score()) break;
+    std::pop_heap(heap.begin(), heap.end(), lower);
+    heap.pop_back();
+    const auto& db = slot_features_[next.slot];
+    const KernelScore s = ScoreLmdMap(q, db.data(), db.size(), &sc.kernel);
+    MapHit hit;
+    hit.map_id = next.id;
+    hit.score = s.score;
+    hit.orientation = s.orientation;
+    hit.offset = {s.offset_x * options_.pose_quantum_m, s.offset_y * options_.pose_quantum_m};
+    top.Offer(hit);
+  }
+  return top.Take();
+}
+
+std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k) const {
+  RetrieveScratch& sc = Scratch();
+  if (sc.counts.size() < slot_id_.size()) sc.counts.resize(slot_id_.size(), 0);
+  if (sc.word_counts.size() < slot_id_.size()) sc.word_counts.resize(slot_id_.size(), 0);
+  sc.touched.clear();
+  uint32_t* total = sc.counts.data();
+  uint32_t* word_count = sc.word_counts.data();
+  const size_t nq = q.features.size();
+  for (size_t i = 0; i < nq;) {
+    const uint32_t word = q.features[i].word;
+    size_t e = i + 1;
+    while (e < nq && q.features[e].word == word) ++e;
+    const uint32_t query_count = static_cast<uint32_t>(e - i);
+    i = e;
+    auto keys = word_keys_.find(word);
+    if (keys == word_keys_.end()) continue;
+    sc.word_touched.clear();
+    for (uint64_t key : keys->second) {
+      for (const Posting& p : lists_.find(key)->second) {
+        if (word_count[p.slot]++ == 0) sc.word_touched.push_back(p.slot);
+      }
+    }
+    for (uint32_t slot : sc.word_touched) {
+      if (total[slot] == 0) sc.touched.push_back(slot);
+      total[slot] += std::min(query_count, word_count[slot]);
+      word_count[slot] = 0;
+    }
+  }
+  TopHits top(top_k);
+  for (uint32_t slot : sc.touched) {
+    MapHit hit;
+    hit.map_id = slot_id_[slot];
+    hit.score = NormalizeScore(static_cast<double>(total[slot]), nq, slot_features_[slot].size(), q.normalization);
+    total[slot] = 0;
+    top.Offer(hit);
+  }
+  return top.Take();
+}
+
+}  // namespace lmd

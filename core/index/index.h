@@ -1,0 +1,100 @@
+// Inverted file over local map descriptors (DESIGN.md §1 "Index.Retrieve").
+//
+// Posting key = (appearance word, level-0 pyramid cell of the feature's pose
+// word in the db map's planned frame); a posting = (map slot, x, y).
+// Why: the kernel (pyramid_kernel.h) only counts a query feature against db
+// features of the same word in the same level-0 cell as the shifted query
+// feature, and the shift is at most max_offset per axis, so for orientation o
+// a query feature can only gain from the lists keyed (its word, a level-0
+// cell meeting the box R(o) q +- max_offset). With B = 10 bits there are only
+// 1024 words, so word-only lists would hold ~every map; the pose cell makes a
+// query read a few percent of all postings.
+//
+// Retrieval is exact: one pass over those lists gives every map an upper bound
+// of its K (count of query features with a same-word posting in their cells,
+// capped by min(|q|, |d|), normalised; see pyramid_kernel.h). Maps are then
+// scored exactly, best bound first, with the same ScoreLmdMap as the
+// exhaustive scorer, until the next bound is below the k-th best score.
+// Scores, orientations, offsets and ranks are therefore identical to
+// RetrieveExhaustive's (tests/core/index_test.cc checks it on random data).
+// Hits are ordered by score (descending), then map id (ascending); maps
+// scoring 0 are never returned.
+//
+// Thread safety: const methods may run concurrently; Add / Remove / Load need
+// exclusive access (the caller's lock).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <unordered_map>
+#include <vector>
+
+#include "core/index/pyramid_kernel.h"
+#include "core/index/retrieve_options.h"
+#include "core/status.h"
+#include "core/types.h"
+
+namespace lmd {
+
+class Index {
+ public:
+  // InvalidArgument if the options are invalid (retrieve_options.h).
+  static Result<Index> Create(const IndexOptions& options = {});
+
+  // Indexes `lmd` under `id`. AlreadyExists if `id` is stored; InvalidArgument
+  // if a feature cannot be a pose word (ToPoseFeatures). Nothing changes on error.
+  Status Add(uint64_t id, const Lmd& lmd);
+  // Same from pose features already sorted by (word, x, y) (e.g. decoded
+  // posting records).
+  Status AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features);
+
+  // Removes the map and every posting of it; false if `id` is not stored.
+  bool Remove(uint64_t id);
+
+  // Top options.top_k maps for `query`, ranked (MapHit::rank = 0 is best).
+  // InvalidArgument for bad options or a query feature that is not a pose word.
+  Result<std::vector<MapHit>> Retrieve(const Lmd& query, const RetrieveOptions& options = {}) const;
+
+  size_t size() const { return id_to_slot_.size(); }
+  bool Contains(uint64_t id) const { return id_to_slot_.count(id) != 0; }
+  const IndexOptions& options() const { return options_; }
+
+  // Total postings (one per indexed feature), and the postings of `id`
+  // found by scanning every list (for tests; slow).
+  size_t PostingCount() const { return posting_count_; }
+  size_t CountPostingsOfMap(uint64_t id) const;
+  // Approximate heap bytes held (postings, lists, per-map features, id maps).
+  size_t MemoryBytes() const;
+
+  // Calls fn(id, features sorted by (word, x, y)) for every stored map, in
+  // slot order (the exhaustive scorer walks maps with it).
+  void ForEachMap(const std::function<void(uint64_t, const std::vector<PoseFeature>&)>& fn) const;
+
+  // Posting key of a pose feature: word and level-0 cell (cx, cy).
+  static uint64_t PostingKey(uint32_t word, int32_t cx, int32_t cy);
+
+ private:
+  explicit Index(const IndexOptions& options);
+  std::vector<MapHit> RetrieveLmd(const PreparedQuery& q, size_t top_k) const;
+  std::vector<MapHit> RetrieveBow(const PreparedQuery& q, size_t top_k) const;
+
+  struct Posting {
+    uint32_t slot;
+    int16_t x;
+    int16_t y;
+  };
+
+  IndexOptions options_;
+  int32_t cell0_ = 100;  // pose units
+  std::unordered_map<uint64_t, std::vector<Posting>> lists_;  // PostingKey -> postings
+  std::unordered_map<uint32_t, std::vector<uint64_t>> word_keys_;  // word -> its keys (kBow)
+  std::unordered_map<uint64_t, uint32_t> id_to_slot_;
+  std::vector<uint64_t> slot_id_;                    // valid where slot_used_
+  std::vector<uint8_t> slot_used_;
+  std::vector<std::vector<PoseFeature>> slot_features_;
+  std::vector<uint32_t> free_slots_;
+  size_t posting_count_ = 0;
+};
+
+}  // namespace lmd

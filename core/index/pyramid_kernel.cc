@@ -1,0 +1,220 @@
+#include "core/index/pyramid_kernel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace lmd {
+namespace {
+
+bool PoseFeatureLess(const PoseFeature& a, const PoseFeature& b) {
+  if (a.word != b.word) return a.word < b.word;
+  if (a.x != b.x) return a.x < b.x;
+  return a.y < b.y;
+}
+
+// Lexicographic (a, b) as one int64.
+int64_t PackPair(int32_t a, int32_t b) {
+  return static_cast<int64_t>(a) * (int64_t{1} << 32) + (static_cast<int64_t>(b) + (int64_t{1} << 31));
+}
+
+// Pairs the query and db features that share an appearance word.
+void GroupSharedWords(const PreparedQuery& q, const PoseFeature* db, size_t nd,
+                      std::vector<KernelScratch::Group>* groups) {
+  groups->clear();
+  const PoseFeature* qf = q.features.data();
+  const size_t nq = q.features.size();
+  size_t i = 0, j = 0;
+  while (i < nq && j < nd) {
+    if (qf[i].word < db[j].word) {
+      ++i;
+    } else if (db[j].word < qf[i].word) {
+      ++j;
+    } else {
+      const uint32_t w = qf[i].word;
+      size_t ie = i + 1, je = j + 1;
+      while (ie < nq && qf[ie].word == w) ++ie;
+      while (je < nd && db[je].word == w) ++je;
+      groups->push_back({static_cast<uint32_t>(i), static_cast<uint32_t>(ie), static_cast<uint32_t>(j),
+                         static_cast<uint32_t>(je)});
+      i = ie;
+      j = je;
+    }
+  }
+}
+
+// sum over cells of min(count in a, count in b); a and b are sorted here.
+int CountIntersection(std::vector<int64_t>* a, std::vector<int64_t>* b) {
+  std::sort(a->begin(), a->end());
+  std::sort(b->begin(), b->end());
+  int total = 0;
+  size_t i = 0, j = 0;
+  while (i < a->size() && j < b->size()) {
+    if ((*a)[i] < (*b)[j]) {
+      ++i;
+    } else if ((*b)[j] < (*a)[i]) {
+      ++j;
+    } else {
+      const int64_t c = (*a)[i];
+      int na = 0, nb = 0;
+      while (i < a->size() && (*a)[i] == c) ++i, ++na;
+      while (j < b->size() && (*b)[j] == c) ++j, ++nb;
+      total += std::min(na, nb);
+    }
+  }
+  return total;
+}
+
+}  // namespace
+
+Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptions& options) {
+  std::vector<PoseFeature> out;
+  out.reserve(lmd.features.size());
+  const double inv = 1.0 / options.pose_quantum_m;
+  for (size_t i = 0; i < lmd.features.size(); ++i) {
+    const Feature& f = lmd.features[i];
+    if (f.appearance_word > kMaxAppearanceWord)
+      return Status::InvalidArgument("feature " + std::to_string(i) + ": appearance word " +
+                                     std::to_string(f.appearance_word) + " exceeds 65535");
+    const double x = std::round(f.x * inv), y = std::round(f.y * inv);
+    if (!std::isfinite(x) || !std::isfinite(y) || std::fabs(x) > 32767 || std::fabs(y) > 32767)
+      return Status::InvalidArgument("feature " + std::to_string(i) +
+                                     ": position is not finite or outside the pose-word range");
+    out.push_back({f.appearance_word, static_cast<int16_t>(x), static_cast<int16_t>(y)});
+  }
+  std::sort(out.begin(), out.end(), PoseFeatureLess);
+  return out;
+}
+
+PreparedQuery PrepareQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
+                           const RetrieveOptions& options) {
+  PreparedQuery q;
+  q.features = std::move(query);
+  const size_t n = q.features.size();
+  for (int o = 0; o < 4; ++o) {
+    q.rx[o].resize(n);
+    q.ry[o].resize(n);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t x = q.features[i].x, y = q.features[i].y;
+    q.rx[0][i] = x;  q.ry[0][i] = y;
+    q.rx[1][i] = -y; q.ry[1][i] = x;
+    q.rx[2][i] = -x; q.ry[2][i] = -y;
+    q.rx[3][i] = y;  q.ry[3][i] = -x;
+  }
+  // Floor so that the box is never wider than asked; the bin is at least 1 unit.
+  q.max_offset = static_cast<int32_t>(std::floor(options.max_offset_m / index_options.pose_quantum_m + 1e-9));
+  q.offset_bin = std::max<int32_t>(
+      1, static_cast<int32_t>(std::lround(options.offset_bin_m / index_options.pose_quantum_m)));
+  q.cell0 = static_cast<int32_t>(std::lround(index_options.pyramid_cell_m / index_options.pose_quantum_m));
+  q.levels = index_options.pyramid_levels;
+  q.normalization = options.normalization;
+  return q;
+}
+
+double NormalizeScore(double raw, size_t nq, size_t nd, Normalization normalization) {
+  if (nq == 0 || nd == 0) return 0.0;
+  switch (normalization) {
+    case Normalization::kNone: return raw;
+    case Normalization::kMin: return raw / static_cast<double>(std::min(nq, nd));
+    case Normalization::kSqrt: return raw / std::sqrt(static_cast<double>(nq) * static_cast<double>(nd));
+  }
+  return raw;
+}
+
+KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd, KernelScratch* s) {
+  KernelScore best;
+  GroupSharedWords(q, db, nd, &s->groups);
+  if (s->groups.empty()) return best;
+  const int32_t box = q.max_offset;
+  const int levels = q.levels;
+  for (int o = 0; o < 4; ++o) {
+    const int32_t* rx = q.rx[o].data();
+    const int32_t* ry = q.ry[o].data();
+    // 1-3: matches in the box, histogram of differences, mode bin, offset.
+    s->matches.clear();
+    for (const auto& g : s->groups) {
+      for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
+        for (uint32_t j = g.d_begin; j < g.d_end; ++j) {
+          const int32_t dx = db[j].x - rx[i], dy = db[j].y - ry[i];
+          if (dx < -box || dx > box || dy < -box || dy > box) continue;
+          s->matches.push_back({PackPair(FloorDiv(dx, q.offset_bin), FloorDiv(dy, q.offset_bin)), dx, dy});
+        }
+      }
+    }
+    if (s->matches.empty()) continue;
+    std::sort(s->matches.begin(), s->matches.end(),
+              [](const KernelScratch::Match& a, const KernelScratch::Match& b) { return a.bin < b.bin; });
+    size_t mode_begin = 0, mode_count = 0;
+    for (size_t k = 0; k < s->matches.size();) {
+      size_t e = k + 1;
+      while (e < s->matches.size() && s->matches[e].bin == s->matches[k].bin) ++e;
+      if (e - k > mode_count) mode_count = e - k, mode_begin = k;
+      k = e;
+    }
+    int64_t sx = 0, sy = 0;
+    for (size_t k = mode_begin; k < mode_begin + mode_count; ++k) sx += s->matches[k].dx, sy += s->matches[k].dy;
+    const int64_t c = static_cast<int64_t>(mode_count);
+    // round(sum / c), halves away from -inf; exact integer arithmetic.
+    auto round_mean = [c](int64_t sum) {
+      const int64_t num = 2 * sum + c, den = 2 * c;
+      return static_cast<int32_t>(num >= 0 ? num / den : -((-num + den - 1) / den));
+    };
+    const int32_t tx = round_mean(sx), ty = round_mean(sy);
+    // 4-5: pyramid intersection of the shifted query against the db map.
+    int inter[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    for (const auto& g : s->groups) {
+      if (g.q_end - g.q_begin == 1 && g.d_end - g.d_begin == 1) {
+        const int32_t qx = rx[g.q_begin] + tx, qy = ry[g.q_begin] + ty;
+        const int32_t px = db[g.d_begin].x, py = db[g.d_begin].y;
+        for (int l = 0; l <= levels; ++l) {
+          const int32_t cw = q.cell0 >> l;
+          if (FloorDiv(qx, cw) != FloorDiv(px, cw) || FloorDiv(qy, cw) != FloorDiv(py, cw)) break;
+          ++inter[l];
+        }
+        continue;
+      }
+      for (int l = 0; l <= levels; ++l) {
+        const int32_t cw = q.cell0 >> l;
+        s->cells_q.clear();
+        s->cells_d.clear();
+        for (uint32_t i = g.q_begin; i < g.q_end; ++i)
+          s->cells_q.push_back(PackPair(FloorDiv(rx[i] + tx, cw), FloorDiv(ry[i] + ty, cw)));
+        for (uint32_t j = g.d_begin; j < g.d_end; ++j)
+          s->cells_d.push_back(PackPair(FloorDiv(db[j].x, cw), FloorDiv(db[j].y, cw)));
+        const int n = CountIntersection(&s->cells_q, &s->cells_d);
+        if (n == 0) break;
+        inter[l] += n;
+      }
+    }
+    double raw = std::ldexp(static_cast<double>(inter[0]), -levels);
+    for (int l = 1; l <= levels; ++l) raw += std::ldexp(static_cast<double>(inter[l]), -(levels - l + 1));
+    const double score = NormalizeScore(raw, q.features.size(), nd, q.normalization);
+    if (score > best.score) best = {score, o, tx, ty};
+  }
+  return best;
+}
+
+double ScoreBowMap(const PreparedQuery& q, const PoseFeature* db, size_t nd) {
+  const PoseFeature* qf = q.features.data();
+  const size_t nq = q.features.size();
+  size_t i = 0, j = 0;
+  int64_t total = 0;
+  while (i < nq && j < nd) {
+    if (qf[i].word < db[j].word) {
+      ++i;
+    } else if (db[j].word < qf[i].word) {
+      ++j;
+    } else {
+      const uint32_t w = qf[i].word;
+      int64_t a = 0, b = 0;
+      while (i < nq && qf[i].word == w) ++i, ++a;
+      while (j < nd && db[j].word == w) ++j, ++b;
+      total += std::min(a, b);
+    }
+  }
+  return NormalizeScore(static_cast<double>(total), nq, nd, q.normalization);
+}
+
+}  // namespace lmd

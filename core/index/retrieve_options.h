@@ -1,0 +1,65 @@
+// Options and results of map retrieval (DESIGN.md §1 "Index.Retrieve"), shared
+// by the inverted file (index.h) and the exhaustive scorer (exhaustive.h).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/status.h"
+#include "core/types.h"
+
+namespace lmd {
+
+// Which similarity ranks the maps.
+enum class Method {
+  kLmd,  // spatial pyramid match kernel over (appearance word, pose cell),
+         // 4 orientation hypotheses, offset = mode of pose-word differences.
+         // LMD+CoG and LMD+CoR differ only by the planner used upstream.
+  kBow,  // baseline: histogram intersection of appearance-word counts, no pose.
+};
+
+// How the raw kernel value is divided by the map sizes (|q|, |d| = feature
+// counts). Raw intersections grow with map size and favour big maps.
+enum class Normalization {
+  kNone,  // raw K (paper's formula as printed)
+  kMin,   // K / min(|q|, |d|)
+  kSqrt,  // K / sqrt(|q| |d|)  (default: symmetric, in [0, 1], cosine-like)
+};
+
+// Fixed when an index is created: they define the pose words and the
+// posting keys, so they cannot change per query.
+struct IndexOptions {
+  double pose_quantum_m = 0.05;  // m; pose word = round(position / quantum).
+  double pyramid_cell_m = 5.0;   // W, m: cell width at level 0 (paper: 5 m).
+  int pyramid_levels = 2;        // L: levels 0..L, cell width W * 2^-l (paper: 2).
+};
+
+// Per query.
+struct RetrieveOptions {
+  size_t top_k = 10;                 // hits returned (>= 1)
+  Method method = Method::kLmd;
+  // Largest |offset| (per axis, m) between the planned frames of two maps of
+  // the same place. Only word matches whose pose difference (db minus rotated
+  // query) lies in [-max_offset_m, max_offset_m]^2 vote for the offset, so the
+  // offset is inside that box too. Planned viewpoints of one place are close
+  // (median error target < 0.5 m), which is what keeps queries local.
+  double max_offset_m = 2.0;
+  double offset_bin_m = 0.5;         // m; bin of the pose-difference histogram
+  Normalization normalization = Normalization::kSqrt;
+};
+
+// One retrieved map. db planned position ~= R(orientation * 90 deg) * query
+// planned position + offset.
+struct MapHit {
+  uint64_t map_id = 0;
+  double score = 0.0;     // K (normalised as asked); BoW: word intersection
+  int orientation = 0;    // 0..3, multiples of 90 deg, counter-clockwise
+  Point2 offset;          // m, in the db map's planned frame (BoW: 0, 0)
+  size_t rank = 0;        // 0 = best
+};
+
+// InvalidArgument naming the bad field, or OK.
+Status ValidateIndexOptions(const IndexOptions& options);
+Status ValidateRetrieveOptions(const RetrieveOptions& options);
+
+}  // namespace lmd

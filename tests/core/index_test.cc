@@ -1,0 +1,272 @@
+#include "core/index/index.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/index/exhaustive.h"
+#include "core/index/postings.h"
+#include "tests/core/synthetic_lmd.h"
+
+namespace lmd {
+namespace {
+
+using testing::RandomLmd;
+using testing::TransformedCopy;
+
+Index MakeIndex(const IndexOptions& options = {}) {
+  auto index = Index::Create(options);
+  EXPECT_TRUE(index.ok()) << index.status().ToString();
+  return std::move(index).value();
+}
+
+// A collection of places, each stored as several noisy views, plus queries
+// that are new views of some places.
+struct Collection {
+  std::vector<Lmd> places;
+  std::vector<Lmd> maps;
+  std::vector<Lmd> queries;
+};
+
+Collection MakeCollection(uint64_t seed, int places, int views, int queries, int features) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> shift(-1.5, 1.5);
+  Collection c;
+  for (int p = 0; p < places; ++p) c.places.push_back(RandomLmd(rng, features));
+  for (int p = 0; p < places; ++p)
+    for (int v = 0; v < views; ++v)
+      c.maps.push_back(TransformedCopy(c.places[p], static_cast<int>(rng() % 4), shift(rng), shift(rng), rng, 0.1, 0.7));
+  for (int q = 0; q < queries; ++q)
+    c.queries.push_back(TransformedCopy(c.places[rng() % places], static_cast<int>(rng() % 4), shift(rng),
+                                        shift(rng), rng, 0.1, 0.7));
+  return c;
+}
+
+void ExpectSameHits(const std::vector<MapHit>& a, const std::vector<MapHit>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].map_id, b[i].map_id) << "rank " << i;
+    EXPECT_EQ(a[i].score, b[i].score) << "rank " << i;  // bit-identical
+    EXPECT_EQ(a[i].orientation, b[i].orientation) << "rank " << i;
+    EXPECT_EQ(a[i].offset.x, b[i].offset.x) << "rank " << i;
+    EXPECT_EQ(a[i].offset.y, b[i].offset.y) << "rank " << i;
+    EXPECT_EQ(a[i].rank, i);
+    EXPECT_EQ(b[i].rank, i);
+  }
+}
+
+TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
+  for (uint64_t seed : {1, 2, 3}) {
+    Collection c = MakeCollection(seed, 60, 4, 15, 80);
+    Index index = MakeIndex();
+    for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(1000 + m * 7, c.maps[m]).ok());
+    for (Normalization norm : {Normalization::kSqrt, Normalization::kMin, Normalization::kNone}) {
+      for (Method method : {Method::kLmd, Method::kBow}) {
+        for (size_t k : {1, 10, 300}) {
+          RetrieveOptions options;
+          options.top_k = k;
+          options.method = method;
+          options.normalization = norm;
+          for (const Lmd& q : c.queries) {
+            auto inverted = index.Retrieve(q, options);
+            auto exhaustive = RetrieveExhaustive(index, q, options);
+            ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+            ASSERT_FALSE(inverted->empty());
+            ExpectSameHits(*inverted, *exhaustive);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(IndexTest, InvertedFileAgreesWithExhaustiveWhenMapsShareNoPlace) {
+  // All maps random: many near-equal low scores, where ties and the pruning
+  // bound matter most.
+  std::mt19937_64 rng(9);
+  Index index = MakeIndex();
+  for (uint64_t m = 0; m < 400; ++m) ASSERT_TRUE(index.Add(m, RandomLmd(rng, 60, 8.0, 6)).ok());
+  RetrieveOptions options;
+  for (int q = 0; q < 10; ++q) {
+    const Lmd query = RandomLmd(rng, 60, 8.0, 6);
+    auto inverted = index.Retrieve(query, options);
+    auto exhaustive = RetrieveExhaustive(index, query, options);
+    ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+    EXPECT_EQ(inverted->size(), 10u);
+    ExpectSameHits(*inverted, *exhaustive);
+  }
+}
+
+TEST(IndexTest, StoredMapIsItsOwnTopHit) {
+  Collection c = MakeCollection(4, 50, 3, 0, 80);
+  Index index = MakeIndex();
+  for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
+  for (size_t m = 0; m < c.maps.size(); m += 7) {
+    auto hits = index.Retrieve(c.maps[m]);
+    ASSERT_TRUE(hits.ok());
+    ASSERT_FALSE(hits->empty());
+    EXPECT_EQ((*hits)[0].map_id, m);
+    EXPECT_EQ((*hits)[0].orientation, 0);
+    EXPECT_DOUBLE_EQ((*hits)[0].score, 1.0);  // identical maps, sqrt normalisation
+    EXPECT_EQ((*hits)[0].offset.x, 0.0);
+    EXPECT_EQ((*hits)[0].offset.y, 0.0);
+  }
+}
+
+TEST(IndexTest, RotatedAndShiftedCopyGetsOrientationAndOffset) {
+  std::mt19937_64 rng(5);
+  Index index = MakeIndex();
+  const Lmd db = RandomLmd(rng, 120);
+  ASSERT_TRUE(index.Add(42, db).ok());
+  for (uint64_t m = 0; m < 100; ++m) ASSERT_TRUE(index.Add(100 + m, RandomLmd(rng, 120)).ok());
+  for (int k : {0, 1, 2, 3}) {
+    const double tx = 0.8 - 0.5 * k, ty = -1.3 + 0.7 * k;
+    const Lmd query = TransformedCopy(db, k, tx, ty, rng, 0.03, 0.8);
+    auto hits = index.Retrieve(query);
+    ASSERT_TRUE(hits.ok());
+    ASSERT_FALSE(hits->empty());
+    EXPECT_EQ((*hits)[0].map_id, 42u) << "k=" << k;
+    EXPECT_EQ((*hits)[0].orientation, k);
+    EXPECT_NEAR((*hits)[0].offset.x, tx, 0.1);
+    EXPECT_NEAR((*hits)[0].offset.y, ty, 0.1);
+    EXPECT_GT((*hits)[0].score, 0.5);
+  }
+}
+
+TEST(IndexTest, OffsetsBeyondMaxOffsetAreNotFound) {
+  std::mt19937_64 rng(6);
+  Index index = MakeIndex();
+  const Lmd db = RandomLmd(rng, 120);
+  ASSERT_TRUE(index.Add(1, db).ok());
+  RetrieveOptions options;
+  options.max_offset_m = 1.0;
+  auto near = index.Retrieve(TransformedCopy(db, 0, 0.9, 0.0, rng), options);
+  auto far = index.Retrieve(TransformedCopy(db, 0, 3.0, 0.0, rng), options);
+  ASSERT_TRUE(near.ok() && far.ok());
+  ASSERT_FALSE(near->empty());
+  EXPECT_NEAR((*near)[0].offset.x, 0.9, 0.051);
+  EXPECT_TRUE(far->empty() || (*far)[0].score < 0.2);
+}
+
+TEST(IndexTest, RemovingAMapRemovesEveryPostingOfIt) {
+  std::mt19937_64 rng(7);
+  Index index = MakeIndex();
+  std::vector<Lmd> maps;
+  for (uint64_t m = 0; m < 30; ++m) {
+    maps.push_back(RandomLmd(rng, 50));
+    ASSERT_TRUE(index.Add(m, maps.back()).ok());
+  }
+  const size_t before = index.PostingCount();
+  EXPECT_EQ(before, 30u * 50u);
+  EXPECT_EQ(index.CountPostingsOfMap(12), 50u);
+  EXPECT_TRUE(index.Remove(12));
+  EXPECT_FALSE(index.Remove(12));
+  EXPECT_FALSE(index.Contains(12));
+  EXPECT_EQ(index.size(), 29u);
+  EXPECT_EQ(index.PostingCount(), before - 50);
+  EXPECT_EQ(index.CountPostingsOfMap(12), 0u);
+  for (Method method : {Method::kLmd, Method::kBow}) {
+    RetrieveOptions options;
+    options.method = method;
+    options.top_k = 100;
+    auto hits = index.Retrieve(maps[12], options);
+    ASSERT_TRUE(hits.ok());
+    for (const MapHit& h : *hits) EXPECT_NE(h.map_id, 12u);
+  }
+  // The slot is reused and the map can come back.
+  ASSERT_TRUE(index.Add(12, maps[12]).ok());
+  EXPECT_EQ(index.PostingCount(), before);
+  auto hits = index.Retrieve(maps[12]);
+  ASSERT_TRUE(hits.ok());
+  EXPECT_EQ((*hits)[0].map_id, 12u);
+}
+
+TEST(IndexTest, BowRanksMapsByNumberOfSharedWords) {
+  std::mt19937_64 rng(8);
+  const Lmd query = RandomLmd(rng, 40);
+  Index index = MakeIndex();
+  // Map m keeps the first 40 - 5 m query words (positions scrambled: BoW
+  // ignores pose) and fills up with words the query does not have.
+  for (uint64_t m = 0; m < 6; ++m) {
+    Lmd map = RandomLmd(rng, 40);
+    for (size_t i = 0; i < map.features.size(); ++i)
+      map.features[i].appearance_word = i < 40 - 5 * m ? query.features[i].appearance_word : 2000 + i;
+    ASSERT_TRUE(index.Add(m, map).ok());
+  }
+  RetrieveOptions options;
+  options.method = Method::kBow;
+  auto hits = index.Retrieve(query, options);
+  ASSERT_TRUE(hits.ok());
+  ASSERT_EQ(hits->size(), 6u);
+  for (uint64_t m = 0; m < 6; ++m) {
+    EXPECT_EQ((*hits)[m].map_id, m);
+    EXPECT_DOUBLE_EQ((*hits)[m].score, (40.0 - 5.0 * m) / 40.0);
+    EXPECT_EQ((*hits)[m].rank, m);
+  }
+}
+
+TEST(IndexTest, LoadingPostingRecordsRestoresTheSameIndex) {
+  Collection c = MakeCollection(10, 20, 3, 5, 60);
+  Index original = MakeIndex();
+  Index loaded = MakeIndex();
+  std::vector<PostingRecord> all;
+  for (size_t m = 0; m < c.maps.size(); ++m) {
+    ASSERT_TRUE(original.Add(m, c.maps[m]).ok());
+    auto records = PostingsOf(m, c.maps[m], original.options());
+    ASSERT_TRUE(records.ok());
+    EXPECT_EQ(PostingBytes(*records), records->size() * 14 + c.maps[m].features.size() * 4);
+    for (size_t r = 1; r < records->size(); ++r) EXPECT_LT((*records)[r - 1].key, (*records)[r].key);
+    all.insert(all.end(), records->begin(), records->end());
+  }
+  ASSERT_TRUE(LoadPostings(all, &loaded).ok());
+  EXPECT_EQ(loaded.size(), original.size());
+  EXPECT_EQ(loaded.PostingCount(), original.PostingCount());
+  for (const Lmd& q : c.queries) ExpectSameHits(*original.Retrieve(q), *loaded.Retrieve(q));
+  EXPECT_EQ(LoadPostings(all, &loaded).code(), Status::Code::kAlreadyExists);
+  std::vector<PostingRecord> bad = {all[0]};
+  bad[0].value.pop_back();
+  EXPECT_EQ(LoadPostings(bad, &loaded).code(), Status::Code::kCorruption);
+}
+
+TEST(IndexTest, RejectsBadOptionsAndBadFeatures) {
+  IndexOptions bad_index;
+  bad_index.pyramid_cell_m = 5.01;
+  EXPECT_FALSE(Index::Create(bad_index).ok());
+  bad_index = {};
+  bad_index.pose_quantum_m = 0;
+  EXPECT_FALSE(Index::Create(bad_index).ok());
+  bad_index = {};
+  bad_index.pyramid_levels = -1;
+  EXPECT_FALSE(Index::Create(bad_index).ok());
+
+  Index index = MakeIndex();
+  std::mt19937_64 rng(11);
+  const Lmd map = RandomLmd(rng, 10);
+  ASSERT_TRUE(index.Add(1, map).ok());
+  EXPECT_EQ(index.Add(1, map).code(), Status::Code::kAlreadyExists);
+  RetrieveOptions options;
+  options.top_k = 0;
+  EXPECT_EQ(index.Retrieve(map, options).status().code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(RetrieveExhaustive(index, map, options).status().code(), Status::Code::kInvalidArgument);
+  options = {};
+  options.offset_bin_m = 0;
+  EXPECT_FALSE(index.Retrieve(map, options).ok());
+  options = {};
+  options.max_offset_m = -1;
+  EXPECT_FALSE(index.Retrieve(map, options).ok());
+  Lmd nan_map = map;
+  nan_map.features[3].x = std::nanf("");
+  EXPECT_EQ(index.Add(2, nan_map).code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(index.Retrieve(nan_map).status().code(), Status::Code::kInvalidArgument);
+  Lmd far_map = map;
+  far_map.features[0].x = 1e5f;
+  EXPECT_EQ(index.Add(3, far_map).code(), Status::Code::kInvalidArgument);
+  Lmd wide_word = map;
+  wide_word.features[0].appearance_word = 1u << 20;
+  EXPECT_EQ(index.Add(4, wide_word).code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(index.size(), 1u);
+}
+
+}  // namespace
+}  // namespace lmd
