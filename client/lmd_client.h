@@ -1,40 +1,66 @@
 // LmdClient: the C++ API a robot's software calls to reach lmdd.
 //
-//   lmd::client::LmdClient client({"127.0.0.1:50051"});
+//   lmd::client::ClientOptions options;
+//   options.target = "lmd.example:50051";
+//   options.token = "robot-7-secret";          // bearer token, if lmdd checks tokens
+//   options.tls_root_ca_file = "/etc/lmd/ca.pem";  // TLS, if lmdd serves it
+//   auto client = lmd::client::LmdClient::Create(options);   // Result<...>
 //   lmd::v1::InsertMapsResponse inserted;
-//   grpc::Status status = client.InsertMaps(request, &inserted);
+//   grpc::Status status = (*client)->InsertMaps(request, &inserted);
 //
-// Every call is synchronous, carries the options' deadline, and returns the
-// server's gRPC status (OK, INVALID_ARGUMENT with a message saying what is
-// wrong, NOT_FOUND, RESOURCE_EXHAUSTED, UNAVAILABLE when lmdd cannot be
-// reached, DEADLINE_EXCEEDED, UNIMPLEMENTED for calls this lmdd lacks).
-// Thread-safe: one client may be shared by many threads.
+// Every call is synchronous and carries the options' deadline, the bearer
+// token, and the "x-lmd-collection" header (so a proxy can route the call to
+// the shard that holds the collection). A call that fails with UNAVAILABLE
+// (lmdd restarting, a shard moving) is retried with exponential backoff up to
+// max_attempts times within the deadline; other errors return at once. Give
+// maps explicit ids when inserting: a retried insert then replaces the same
+// map instead of adding a second copy. The returned status is lmdd's: OK,
+// INVALID_ARGUMENT with a message saying what is wrong, NOT_FOUND,
+// RESOURCE_EXHAUSTED, UNAUTHENTICATED, PERMISSION_DENIED, UNAVAILABLE,
+// DEADLINE_EXCEEDED, UNIMPLEMENTED. Thread-safe: share one client.
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "core/status.h"
 #include "lmd/v1/lmd.grpc.pb.h"
 
 namespace lmd::client {
 
 struct ClientOptions {
-  // lmdd's address, HOST:PORT (any gRPC target string).
+  // lmdd's (or the proxy's) address, HOST:PORT.
   std::string target = "127.0.0.1:50051";
-  // Deadline of each call.
+  // Deadline of each call, retries included.
   std::chrono::milliseconds deadline = std::chrono::seconds(30);
   // Largest message sent or received, bytes. Match lmdd's max_message_bytes.
   int max_message_bytes = 64 << 20;
+  // Bearer token sent as "authorization: Bearer TOKEN"; empty: none.
+  std::string token;
+  // TLS: on when tls_root_ca_file is set (PEM of the CA that signed lmdd's
+  // certificate). A client certificate and key (PEM) if lmdd requires one.
+  std::string tls_root_ca_file;
+  std::string tls_cert_file;
+  std::string tls_key_file;
+  // Expected name in lmdd's certificate, if it differs from the target host.
+  std::string tls_server_name;
+  // Attempts per call when lmdd is UNAVAILABLE (1 = no retry), and the first
+  // backoff; each further backoff doubles, up to 2 s.
+  int max_attempts = 4;
+  std::chrono::milliseconds initial_backoff = std::chrono::milliseconds(100);
 };
 
 class LmdClient {
  public:
-  explicit LmdClient(const ClientOptions& options);
+  // InvalidArgument if a TLS file cannot be read.
+  static Result<std::unique_ptr<LmdClient>> Create(const ClientOptions& options);
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;
-  // Sends each request as one message of a client stream (lmdd writes and
-  // acknowledges them in order); the response lists the stored maps.
+  // Streams the requests as one client stream (lmdd writes and acknowledges
+  // them in order; the response lists the stored maps). Not retried.
   grpc::Status StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
                                 v1::InsertMapsResponse* response) const;
   grpc::Status GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const;
@@ -44,10 +70,17 @@ class LmdClient {
   grpc::Status DetectChanges(const v1::DetectChangesRequest& request, v1::DetectChangesResponse* response) const;
   grpc::Status ListCollections(v1::ListCollectionsResponse* response) const;
   grpc::Status Stats(const v1::StatsRequest& request, v1::StatsResponse* response) const;
+  grpc::Status Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const;
 
  private:
-  // A context carrying the deadline.
-  std::unique_ptr<grpc::ClientContext> NewContext() const;
+  explicit LmdClient(const ClientOptions& options) : options_(options) {}
+
+  // A context with the deadline, token and collection header.
+  std::unique_ptr<grpc::ClientContext> NewContext(const std::string& collection,
+                                                  std::chrono::system_clock::time_point deadline) const;
+  // Runs `call` with a fresh context per attempt, retrying on UNAVAILABLE.
+  grpc::Status WithRetries(const std::string& collection,
+                           const std::function<grpc::Status(grpc::ClientContext*)>& call) const;
 
   ClientOptions options_;
   std::unique_ptr<v1::LmdService::Stub> stub_;

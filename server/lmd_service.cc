@@ -151,4 +151,19 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Stats(grpc::CallbackServerContext* con
   });
 }
 
+grpc::ServerUnaryReactor* LmdServiceImpl::Backup(grpc::CallbackServerContext* context,
+                                                 const v1::BackupRequest* request, v1::BackupResponse* response) {
+  // A backup copies every collection: it needs a server-wide write grant.
+  return runner_->Unary(context, "Backup", "", runner_->Authorize(context, "", Access::kWrite), [=] {
+    if (request->directory().empty() || request->directory().front() != '/') {
+      return Status::InvalidArgument("directory must be an absolute path on the server");
+    }
+    Result<uint64_t> bytes = store_->Backup(request->directory());
+    if (!bytes.ok()) return bytes.status();
+    response->set_directory(request->directory());
+    response->set_bytes(*bytes);
+    return Status::Ok();
+  });
+}
+
 }  // namespace lmd::server

@@ -34,8 +34,10 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
                                             v1::ListCollectionsResponse* response) override;
   grpc::ServerUnaryReactor* Stats(grpc::CallbackServerContext* context, const v1::StatsRequest* request,
                                   v1::StatsResponse* response) override;
-  // Retrieve, DetectChanges and Backup answer UNIMPLEMENTED (the base class)
-  // until they land.
+  grpc::ServerUnaryReactor* Backup(grpc::CallbackServerContext* context, const v1::BackupRequest* request,
+                                   v1::BackupResponse* response) override;
+  // Retrieve and DetectChanges answer UNIMPLEMENTED (the base class) until
+  // the index lands.
 
   // Validates and stores one batch (also used per message by the stream).
   Status Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,

@@ -1,8 +1,10 @@
 #include "server/map_store.h"
 
 #include <cstdio>
+#include <filesystem>
 
 #include <rocksdb/db.h>
+#include <rocksdb/utilities/checkpoint.h>
 #include <rocksdb/write_batch.h>
 
 namespace lmd::server {
@@ -224,6 +226,24 @@ Status MapStore::ListMaps(const std::string& collection, const std::string& afte
     out->push_back(std::move(meta));
   }
   return FromRocks(it->status(), "listing maps");
+}
+
+Result<uint64_t> MapStore::Backup(const std::string& directory) const {
+  std::error_code error;
+  if (std::filesystem::exists(directory, error)) {
+    return Status::InvalidArgument("backup directory " + directory + " already exists");
+  }
+  rocksdb::Checkpoint* checkpoint = nullptr;
+  Status status = FromRocks(rocksdb::Checkpoint::Create(db_, &checkpoint), "preparing a backup");
+  if (!status.ok()) return status;
+  std::unique_ptr<rocksdb::Checkpoint> owned(checkpoint);
+  status = FromRocks(owned->CreateCheckpoint(directory), "writing the backup to " + directory);
+  if (!status.ok()) return status;
+  uint64_t bytes = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(directory, error)) {
+    if (entry.is_regular_file(error)) bytes += entry.file_size(error);
+  }
+  return bytes;
 }
 
 std::vector<v1::CollectionInfo> MapStore::ListCollections() const {

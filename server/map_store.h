@@ -63,6 +63,12 @@ class MapStore {
   Status ListMaps(const std::string& collection, const std::string& after, uint32_t limit,
                   std::vector<v1::MapMetadata>* out, std::string* next) const;
 
+  // Writes a consistent, openable copy of the whole store into `directory`
+  // (RocksDB checkpoint: hard links where possible) and returns its size in
+  // bytes. InvalidArgument if the directory exists; IoError on failure.
+  // Restore = stop lmdd and start it with --data-dir on the copy.
+  Result<uint64_t> Backup(const std::string& directory) const;
+
   // Every collection with its counters, by name.
   std::vector<v1::CollectionInfo> ListCollections() const;
   bool HasCollection(const std::string& collection) const;

@@ -31,5 +31,6 @@ int DeleteCommand(const CommandContext& ctx);
 int ListMapsCommand(const CommandContext& ctx);
 int CollectionsCommand(const CommandContext& ctx);
 int StatsCommand(const CommandContext& ctx);
+int BackupCommand(const CommandContext& ctx);
 
 }  // namespace lmd::cli

@@ -8,7 +8,8 @@ namespace lmd::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: lmdctl [--server HOST:PORT] [--json] [--timeout SECONDS] <command> [options]\n"
+    "usage: lmdctl [--server HOST:PORT] [--json] [--timeout SECONDS] [--token TOKEN]\n"
+    "              [--tls-ca PEM [--tls-cert PEM --tls-key PEM] [--tls-server-name NAME]] <command> [options]\n"
     "commands:\n"
     "  insert --collection C --file POINTS [--id ID] [--robot R]   store a map from a points file\n"
     "  get --collection C --id ID [--out POINTS]                   show (and save) a stored map\n"
@@ -16,6 +17,7 @@ constexpr char kUsage[] =
     "  list --collection C                                         list a collection's maps (alias: maps)\n"
     "  collections                                                 list collections\n"
     "  stats [--collection C]                                      server and collection statistics\n"
+    "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 
 using Command = int (*)(const CommandContext&);
@@ -25,7 +27,7 @@ const std::map<std::string, Command>& Commands() {
       {"insert", InsertCommand},   {"get", GetCommand},
       {"delete", DeleteCommand},   {"list", ListMapsCommand},
       {"maps", ListMapsCommand},   {"collections", CollectionsCommand},
-      {"stats", StatsCommand},
+      {"stats", StatsCommand},     {"backup", BackupCommand},
   };
   return commands;
 }
@@ -73,8 +75,14 @@ int Main(int argc, char** argv) {
   client::ClientOptions options;
   options.target = args->Get("server", "127.0.0.1:50051");
   options.deadline = std::chrono::seconds(*timeout);
-  const client::LmdClient client(options);
-  return command->second(CommandContext{client, *args, args->Switch("json")});
+  options.token = args->Get("token");
+  options.tls_root_ca_file = args->Get("tls-ca");
+  options.tls_cert_file = args->Get("tls-cert");
+  options.tls_key_file = args->Get("tls-key");
+  options.tls_server_name = args->Get("tls-server-name");
+  Result<std::unique_ptr<client::LmdClient>> client = client::LmdClient::Create(options);
+  if (!client.ok()) return Fail(client.status().message());
+  return command->second(CommandContext{**client, *args, args->Switch("json")});
 }
 
 }  // namespace lmd::cli

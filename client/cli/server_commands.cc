@@ -1,4 +1,4 @@
-// collections and stats of lmdctl.
+// collections, stats and backup of lmdctl.
 #include <cstdio>
 
 #include "client/cli/commands.h"
@@ -42,6 +42,22 @@ int StatsCommand(const CommandContext& ctx) {
                 method.method().c_str(), static_cast<unsigned long long>(method.calls()),
                 static_cast<unsigned long long>(method.errors()), method.p50_ms(), method.p95_ms(),
                 method.p99_ms());
+  }
+  return 0;
+}
+
+int BackupCommand(const CommandContext& ctx) {
+  v1::BackupRequest request;
+  request.set_directory(Required(ctx.args, "dir"));
+  if (request.directory().empty()) return 2;
+  v1::BackupResponse response;
+  const grpc::Status status = ctx.client.Backup(request, &response);
+  if (!status.ok()) return FailCall(status);
+  if (ctx.json) {
+    std::printf("%s\n", ToJsonLine(response).c_str());
+  } else {
+    std::printf("backup of %llu bytes written to %s (on the server)\n",
+                static_cast<unsigned long long>(response.bytes()), response.directory().c_str());
   }
   return 0;
 }

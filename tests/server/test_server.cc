@@ -29,7 +29,7 @@ TestServer::TestServer(const std::string& data_dir, server::ServerConfig config)
   options.target = address();
   options.deadline = std::chrono::seconds(20);
   options.max_message_bytes = 256 << 20;  // above any server limit: the server is what refuses
-  client_ = std::make_unique<client::LmdClient>(options);
+  client_ = std::move(client::LmdClient::Create(options)).value();
 }
 
 TestServer::~TestServer() { Stop(); }
