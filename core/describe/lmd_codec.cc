@@ -1,0 +1,136 @@
+#include "core/describe/lmd_codec.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace lmd {
+namespace {
+
+constexpr size_t kFeatureBytes = 14;
+
+void PutU16(std::string& out, uint16_t v) {
+  out.push_back(static_cast<char>(v & 0xff));
+  out.push_back(static_cast<char>(v >> 8));
+}
+
+void PutF32(std::string& out, float f) {
+  uint32_t v;
+  std::memcpy(&v, &f, 4);
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+int16_t Quantise(float v) {
+  const double q = std::round(static_cast<double>(v) / kLmdPositionQuantumM);
+  if (!(q == q)) return 0;  // NaN
+  if (q > 32767) return 32767;
+  if (q < -32767) return -32767;
+  return static_cast<int16_t>(q);
+}
+
+class Reader {
+ public:
+  explicit Reader(const std::string& s) : p_(reinterpret_cast<const uint8_t*>(s.data())), left_(s.size()) {}
+  size_t left() const { return left_; }
+  bool U8(uint8_t* v) {
+    if (left_ < 1) return false;
+    *v = *p_++, --left_;
+    return true;
+  }
+  bool U16(uint16_t* v) {
+    if (left_ < 2) return false;
+    *v = static_cast<uint16_t>(p_[0] | (p_[1] << 8));
+    p_ += 2, left_ -= 2;
+    return true;
+  }
+  bool U64(uint64_t* v) {
+    if (left_ < 8) return false;
+    *v = 0;
+    for (int i = 7; i >= 0; --i) *v = (*v << 8) | p_[i];
+    p_ += 8, left_ -= 8;
+    return true;
+  }
+  bool F32(float* f) {
+    if (left_ < 4) return false;
+    const uint32_t v = static_cast<uint32_t>(p_[0]) | (static_cast<uint32_t>(p_[1]) << 8) |
+                       (static_cast<uint32_t>(p_[2]) << 16) | (static_cast<uint32_t>(p_[3]) << 24);
+    std::memcpy(f, &v, 4);
+    p_ += 4, left_ -= 4;
+    return true;
+  }
+  bool Varint(uint64_t* v) {
+    *v = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      uint8_t b;
+      if (!U8(&b)) return false;
+      *v |= static_cast<uint64_t>(b & 0x7f) << shift;
+      if (!(b & 0x80)) return true;
+    }
+    return false;
+  }
+
+ private:
+  const uint8_t* p_;
+  size_t left_;
+};
+
+}  // namespace
+
+std::string EncodeLmd(const Lmd& lmd) {
+  std::string out;
+  out.reserve(16 + kFeatureBytes * lmd.features.size());
+  out.push_back(static_cast<char>(kLmdCodecVersion));
+  for (uint64_t n = lmd.features.size();; n >>= 7) {
+    if (n < 0x80) {
+      out.push_back(static_cast<char>(n));
+      break;
+    }
+    out.push_back(static_cast<char>((n & 0x7f) | 0x80));
+  }
+  PutF32(out, static_cast<float>(lmd.frame.origin.x));
+  PutF32(out, static_cast<float>(lmd.frame.origin.y));
+  PutF32(out, static_cast<float>(lmd.frame.heading));
+  for (const Feature& f : lmd.features) {
+    PutU16(out, static_cast<uint16_t>(Quantise(f.x)));
+    PutU16(out, static_cast<uint16_t>(Quantise(f.y)));
+    PutU16(out, static_cast<uint16_t>(f.appearance_word & 0xffff));
+    const uint64_t cw = f.change_word & ((uint64_t{1} << 60) - 1);
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((cw >> (8 * i)) & 0xff));
+  }
+  return out;
+}
+
+Result<Lmd> DecodeLmd(const std::string& bytes) {
+  Reader r(bytes);
+  uint8_t version;
+  if (!r.U8(&version)) return Status::Corruption("lmd: empty record");
+  if (version != kLmdCodecVersion) {
+    return Status::Corruption("lmd: unknown format version " + std::to_string(version));
+  }
+  uint64_t n;
+  if (!r.Varint(&n)) return Status::Corruption("lmd: truncated feature count");
+  Lmd lmd;
+  float ox, oy, heading;
+  if (!r.F32(&ox) || !r.F32(&oy) || !r.F32(&heading)) return Status::Corruption("lmd: truncated frame");
+  if (!std::isfinite(ox) || !std::isfinite(oy) || !std::isfinite(heading)) {
+    return Status::Corruption("lmd: non-finite frame");
+  }
+  if (n > r.left() / kFeatureBytes || n * kFeatureBytes != r.left()) {
+    return Status::Corruption("lmd: " + std::to_string(n) + " features need " +
+                              std::to_string(n * kFeatureBytes) + " bytes, record has " + std::to_string(r.left()));
+  }
+  lmd.frame = {{ox, oy}, heading};
+  lmd.features.resize(static_cast<size_t>(n));
+  for (Feature& f : lmd.features) {
+    uint16_t x = 0, y = 0, w = 0;
+    uint64_t cw = 0;
+    r.U16(&x), r.U16(&y), r.U16(&w), r.U64(&cw);
+    if (cw >> 60) return Status::Corruption("lmd: change word wider than 60 bits");
+    f.x = static_cast<float>(static_cast<int16_t>(x) * kLmdPositionQuantumM);
+    f.y = static_cast<float>(static_cast<int16_t>(y) * kLmdPositionQuantumM);
+    f.appearance_word = w;
+    f.change_word = cw;
+  }
+  return lmd;
+}
+
+}  // namespace lmd
