@@ -215,7 +215,8 @@ TEST(IndexTest, LoadingPostingRecordsRestoresTheSameIndex) {
     ASSERT_TRUE(original.Add(m, c.maps[m]).ok());
     auto records = PostingsOf(m, c.maps[m], original.options());
     ASSERT_TRUE(records.ok());
-    EXPECT_EQ(PostingBytes(*records), records->size() * 14 + c.maps[m].features.size() * 4);
+    // Small ids and cells near the origin: 2 + 1 + 1 + 1 key bytes, 2 per feature.
+    EXPECT_EQ(PostingBytes(*records), records->size() * 5 + c.maps[m].features.size() * 2);
     for (size_t r = 1; r < records->size(); ++r) EXPECT_LT((*records)[r - 1].key, (*records)[r].key);
     all.insert(all.end(), records->begin(), records->end());
   }
@@ -227,6 +228,23 @@ TEST(IndexTest, LoadingPostingRecordsRestoresTheSameIndex) {
   std::vector<PostingRecord> bad = {all[0]};
   bad[0].value.pop_back();
   EXPECT_EQ(LoadPostings(bad, &loaded).code(), Status::Code::kCorruption);
+  bad = {all[0]};
+  bad[0].key.push_back('\x80');  // unterminated varint
+  EXPECT_EQ(LoadPostings(bad, &loaded).code(), Status::Code::kCorruption);
+  bad = {all[0]};
+  bad[0].value[0] = static_cast<char>(200);  // beyond the 100-unit cell
+  EXPECT_EQ(LoadPostings(bad, &loaded).code(), Status::Code::kCorruption);
+  // Negative cells and large ids round-trip too.
+  Index one = MakeIndex();
+  Lmd far = c.maps[0];
+  for (Feature& f : far.features) f.x -= 700.0f;
+  auto records = PostingsOf(uint64_t{1} << 40, far, one.options());
+  ASSERT_TRUE(records.ok());
+  ASSERT_TRUE(LoadPostings(*records, &one).ok());
+  Index direct = MakeIndex();
+  ASSERT_TRUE(direct.Add(uint64_t{1} << 40, far).ok());
+  ExpectSameHits(*one.Retrieve(far), *direct.Retrieve(far));
+  EXPECT_EQ((*one.Retrieve(far))[0].map_id, uint64_t{1} << 40);
 }
 
 TEST(IndexTest, RejectsBadOptionsAndBadFeatures) {
