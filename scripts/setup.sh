@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config ccache git
+  build-essential cmake ninja-build pkg-config ccache git openssl
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   librocksdb-dev libspdlog-dev libfmt-dev libeigen3-dev zlib1g-dev libmicrohttpd-dev
   libgtest-dev libgmock-dev libbenchmark-dev

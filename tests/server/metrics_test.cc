@@ -1,0 +1,81 @@
+// Observability: Stats reports calls, errors and latencies per method, and
+// /metrics serves them in Prometheus text format.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+// GET `path` from 127.0.0.1:port with a raw HTTP/1.0 request; the whole reply.
+std::string HttpGet(int port, const std::string& path) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<uint16_t>(port));
+  inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
+  std::string reply;
+  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0) {
+    const std::string request = "GET " + path + " HTTP/1.0\r\nHost: localhost\r\n\r\n";
+    if (write(fd, request.data(), request.size()) == static_cast<ssize_t>(request.size())) {
+      char buffer[4096];
+      for (ssize_t n; (n = read(fd, buffer, sizeof(buffer))) > 0;) reply.append(buffer, static_cast<size_t>(n));
+    }
+  }
+  close(fd);
+  return reply;
+}
+
+TEST(MetricsTest, StatsCountCallsAndErrorsPerMethod) {
+  TempDir dir;
+  TestServer server(dir.path());
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("missing");
+  v1::GetMapResponse got;
+  EXPECT_FALSE(server.client().GetMap(get, &got).ok());
+  v1::StatsResponse stats;
+  ASSERT_TRUE(server.client().Stats(v1::StatsRequest(), &stats).ok());
+  std::map<std::string, v1::MethodStats> by_name;
+  for (const auto& method : stats.methods()) by_name[method.method()] = method;
+  ASSERT_EQ(by_name.count("InsertMaps"), 1u);
+  EXPECT_EQ(by_name["InsertMaps"].calls(), 1u);
+  EXPECT_EQ(by_name["InsertMaps"].errors(), 0u);
+  EXPECT_GT(by_name["InsertMaps"].p50_ms(), 0.0);
+  EXPECT_EQ(by_name["GetMap"].errors(), 1u);
+  ASSERT_EQ(stats.collections_size(), 1);
+  EXPECT_EQ(stats.collections(0).maps(), 1u);
+}
+
+TEST(MetricsTest, PrometheusEndpointServesCallsAndCollections) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.metrics_listen = "127.0.0.1:0";
+  config.listen = "127.0.0.1:0";
+  config.data_dir = dir.path();
+  auto server = server::LmdServer::Start(config);
+  ASSERT_TRUE(server.ok()) << server.status().ToString();
+  ASSERT_GT((*server)->metrics_port(), 0);
+  client::ClientOptions options;
+  options.target = "127.0.0.1:" + std::to_string((*server)->port());
+  auto client = std::move(client::LmdClient::Create(options)).value();
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(client->InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+
+  const std::string page = HttpGet((*server)->metrics_port(), "/metrics");
+  EXPECT_NE(page.find("200 OK"), std::string::npos) << page;
+  EXPECT_NE(page.find("lmd_calls_total{method=\"InsertMaps\",code=\"OK\"} 1"), std::string::npos) << page;
+  EXPECT_NE(page.find("lmd_collection_maps{collection=\"site\"} 1"), std::string::npos) << page;
+  EXPECT_NE(page.find("lmd_call_duration_seconds_count{method=\"InsertMaps\"} 1"), std::string::npos) << page;
+  EXPECT_NE(HttpGet((*server)->metrics_port(), "/other").find("404"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lmd::testing
