@@ -1,5 +1,7 @@
 #include "server/lmd_service.h"
 
+#include "proto/convert.h"
+#include "server/indexing.h"
 #include "server/stream_insert.h"
 #include "server/validate.h"
 
@@ -36,19 +38,22 @@ double LmdServiceImpl::uptime_s() const {
 
 Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
                               v1::InsertMapsResponse* response) {
-  std::vector<v1::StoredMap> maps;
+  std::vector<MapWrite> maps;
   maps.reserve(requests.size());
   for (size_t i = 0; i < requests.size(); ++i) {
     Status valid = ValidateInsert(*requests[i], config_, first_index + i);
     if (!valid.ok()) return valid;
-    v1::StoredMap stored;
-    *stored.mutable_metadata() = requests[i]->metadata();
-    *stored.mutable_map() = requests[i]->map();
-    maps.push_back(std::move(stored));
+  }
+  for (const v1::InsertMapRequest* request : requests) {  // described outside the store's lock
+    MapWrite write;
+    *write.map.mutable_metadata() = request->metadata();
+    *write.map.mutable_map() = request->map();
+    write.lmd = DescribeForIndex(FromProto(request->map()), store_->indexing());
+    maps.push_back(std::move(write));
   }
   Status stored = store_->InsertMaps(&maps, config_.max_collections);
   if (!stored.ok()) return stored;
-  for (const v1::StoredMap& map : maps) *response->add_maps() = map.metadata();
+  for (const MapWrite& write : maps) *response->add_maps() = write.map.metadata();
   return Status::Ok();
 }
 

@@ -10,6 +10,7 @@
 #include "lmd/v1/lmd.grpc.pb.h"
 #include "server/call_runner.h"
 #include "server/config.h"
+#include "core/change/change_detector.h"
 #include "server/map_store.h"
 
 namespace lmd::server {
@@ -36,14 +37,31 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
                                   v1::StatsResponse* response) override;
   grpc::ServerUnaryReactor* Backup(grpc::CallbackServerContext* context, const v1::BackupRequest* request,
                                    v1::BackupResponse* response) override;
-  // Retrieve and DetectChanges answer UNIMPLEMENTED (the base class) until
-  // the index lands.
+  grpc::ServerUnaryReactor* Retrieve(grpc::CallbackServerContext* context, const v1::RetrieveRequest* request,
+                                     v1::RetrieveResponse* response) override;
+  grpc::ServerUnaryReactor* DetectChanges(grpc::CallbackServerContext* context,
+                                          const v1::DetectChangesRequest* request,
+                                          v1::DetectChangesResponse* response) override;
 
   // Validates and stores one batch (also used per message by the stream).
   Status Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
                 v1::InsertMapsResponse* response);
 
   const ServerConfig& config() const { return config_; }
+
+ private:
+  // A query: validated, described, and retrieved against its collection.
+  struct Query {
+    Lmd lmd;
+    std::vector<StoreHit> hits;
+  };
+  Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
+                         v1::Method method) const;
+  // The wire form of a hit (metadata, and the pose when the method gives one).
+  Result<v1::MapHit> ToWireHit(const std::string& collection, const Query& query, const StoreHit& hit,
+                               const Lmd* db, v1::Method method) const;
+
+ public:
   double uptime_s() const;
 
  private:

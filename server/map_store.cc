@@ -1,17 +1,40 @@
 #include "server/map_store.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <shared_mutex>
+#include <unordered_map>
 
 #include <rocksdb/db.h>
 #include <rocksdb/utilities/checkpoint.h>
 #include <rocksdb/write_batch.h>
+#include <spdlog/spdlog.h>
+
+#include "core/describe/lmd_codec.h"
+#include "core/index/index.h"
+#include "core/index/postings.h"
 
 namespace lmd::server {
+
+// A collection's counters and in-memory index.
+struct CollectionState {
+  explicit CollectionState(const IndexOptions& options) : index(Index::Create(options).value()) {}
+
+  internal::CollectionRecord record;  // guarded by MapStore::mutex_
+
+  mutable std::shared_mutex index_mutex;
+  // Guarded by index_mutex (shared: queries; exclusive: applying a write).
+  Index index;
+  std::unordered_map<uint64_t, std::string> map_ids;  // index id -> map id
+};
+
 namespace {
 
 constexpr char kFormatKey[] = "format";
-constexpr char kFormatVersion[] = "lmd-store-1";
+constexpr char kFormatVersion[] = "lmd-store-2";
+constexpr char kIndexingKey[] = "indexing";
 
 std::string MapKey(const std::string& collection, const std::string& map_id) {
   return collection + "/" + map_id;
@@ -38,45 +61,44 @@ v1::CollectionInfo ToInfo(const std::string& name, const internal::CollectionRec
   return info;
 }
 
+// What a write does to one collection's index once the batch is durable.
+struct IndexChange {
+  std::vector<uint64_t> removed;
+  std::vector<std::pair<uint64_t, const MapWrite*>> added;
+};
+
 }  // namespace
+
+MapStore::MapStore() = default;
 
 Result<std::unique_ptr<MapStore>> MapStore::Open(const MapStoreOptions& options) {
   rocksdb::DBOptions db_options;
   db_options.create_if_missing = true;
   db_options.create_missing_column_families = true;
   const std::vector<rocksdb::ColumnFamilyDescriptor> families = {
-      {rocksdb::kDefaultColumnFamilyName, {}}, {"maps", {}}, {"metadata", {}}, {"collections", {}}, {"meta", {}}};
+      {rocksdb::kDefaultColumnFamilyName, {}}, {"maps", {}},        {"metadata", {}}, {"descriptors", {}},
+      {"postings", {}},                        {"collections", {}}, {"meta", {}}};
   std::vector<rocksdb::ColumnFamilyHandle*> handles;
   rocksdb::DB* db = nullptr;
   const rocksdb::Status opened = rocksdb::DB::Open(db_options, options.data_dir, families, &handles, &db);
-  if (!opened.ok()) {
-    return FromRocks(opened, "cannot open the store in " + options.data_dir);
-  }
+  if (!opened.ok()) return FromRocks(opened, "cannot open the store in " + options.data_dir);
+
   std::unique_ptr<MapStore> store(new MapStore());
   store->db_ = db;
+  db->DestroyColumnFamilyHandle(handles[0]);
   store->maps_cf_ = handles[1];
   store->metadata_cf_ = handles[2];
-  store->collections_cf_ = handles[3];
-  store->meta_cf_ = handles[4];
+  store->descriptors_cf_ = handles[3];
+  store->postings_cf_ = handles[4];
+  store->collections_cf_ = handles[5];
+  store->meta_cf_ = handles[6];
   store->sync_writes_ = options.sync_writes;
-  db->DestroyColumnFamilyHandle(handles[0]);
+  store->indexing_ = options.indexing;
 
-  std::string format;
-  const rocksdb::Status read = db->Get({}, store->meta_cf_, kFormatKey, &format);
-  if (read.IsNotFound()) {
-    rocksdb::WriteOptions write_options;
-    write_options.sync = true;
-    Status status = FromRocks(db->Put(write_options, store->meta_cf_, kFormatKey, kFormatVersion),
-                              "cannot initialise the store");
-    if (!status.ok()) return status;
-  } else if (!read.ok()) {
-    return FromRocks(read, "cannot read the store format");
-  } else if (format != kFormatVersion) {
-    return Status::Corruption("store in " + options.data_dir + " has format '" + format + "', this lmdd reads '" +
-                              kFormatVersion + "'");
-  }
-  Status loaded = store->LoadCollections();
-  if (!loaded.ok()) return loaded;
+  Status status = store->CheckMeta(options.data_dir);
+  if (status.ok()) status = store->LoadCollections();
+  if (status.ok()) status = store->RebuildIndexes();
+  if (!status.ok()) return status;
   return store;
 }
 
@@ -84,78 +106,101 @@ MapStore::~MapStore() { Close(); }
 
 Status MapStore::Close() {
   if (db_ == nullptr) return Status::Ok();
-  for (auto* handle : {maps_cf_, metadata_cf_, collections_cf_, meta_cf_}) db_->DestroyColumnFamilyHandle(handle);
+  for (auto* handle : {maps_cf_, metadata_cf_, descriptors_cf_, postings_cf_, collections_cf_, meta_cf_}) {
+    db_->DestroyColumnFamilyHandle(handle);
+  }
   const rocksdb::Status closed = db_->Close();
   delete db_;
   db_ = nullptr;
   return FromRocks(closed, "closing the store");
 }
 
+Status MapStore::CheckMeta(const std::string& data_dir) {
+  const std::string fingerprint = Fingerprint(indexing_);
+  std::string format;
+  const rocksdb::Status read = db_->Get({}, meta_cf_, kFormatKey, &format);
+  if (read.IsNotFound()) {  // a new store
+    rocksdb::WriteBatch batch;
+    batch.Put(meta_cf_, kFormatKey, kFormatVersion);
+    batch.Put(meta_cf_, kIndexingKey, fingerprint);
+    rocksdb::WriteOptions write_options;
+    write_options.sync = true;
+    return FromRocks(db_->Write(write_options, &batch), "cannot initialise the store");
+  }
+  if (!read.ok()) return FromRocks(read, "cannot read the store format");
+  if (format != kFormatVersion) {
+    return Status::Corruption("store in " + data_dir + " has format '" + format + "', this lmdd reads '" +
+                              kFormatVersion + "'");
+  }
+  std::string stored;
+  Status status = FromRocks(db_->Get({}, meta_cf_, kIndexingKey, &stored), "cannot read the indexing settings");
+  if (!status.ok()) return status;
+  if (stored != fingerprint) {
+    return Status::Corruption("store in " + data_dir + " was indexed with other settings (" + stored +
+                              "); this lmdd uses (" + fingerprint + "); re-ingest into a new data directory");
+  }
+  return Status::Ok();
+}
+
 Status MapStore::LoadCollections() {
   std::unique_ptr<rocksdb::Iterator> it(db_->NewIterator({}, collections_cf_));
   for (it->SeekToFirst(); it->Valid(); it->Next()) {
-    internal::CollectionRecord record;
-    if (!record.ParseFromArray(it->value().data(), static_cast<int>(it->value().size()))) {
+    auto state = std::make_unique<CollectionState>(indexing_.index);
+    if (!state->record.ParseFromArray(it->value().data(), static_cast<int>(it->value().size()))) {
       return Status::Corruption("collection record '" + it->key().ToString() + "' does not parse");
     }
-    collections_[it->key().ToString()] = record;
+    collections_[it->key().ToString()] = std::move(state);
   }
   return FromRocks(it->status(), "reading collections");
 }
 
-Status MapStore::InsertMaps(std::vector<v1::StoredMap>* maps, uint32_t max_collections) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  // Counters are updated on a copy and published only after the write succeeds.
-  std::map<std::string, internal::CollectionRecord> changed;
-  std::map<std::string, const v1::StoredMap*> written;  // key -> map in this batch
-  rocksdb::WriteBatch batch;
-  size_t new_collections = 0;
-  for (v1::StoredMap& map : *maps) {
-    v1::MapMetadata* meta = map.mutable_metadata();
-    const std::string& collection = meta->collection();
-    auto record_it = changed.find(collection);
-    if (record_it == changed.end()) {
-      const auto stored = collections_.find(collection);
-      if (stored == collections_.end()) ++new_collections;
-      record_it = changed.emplace(collection, stored == collections_.end() ? internal::CollectionRecord()
-                                                                            : stored->second).first;
+Status MapStore::RebuildIndexes() {
+  const auto start = std::chrono::steady_clock::now();
+  size_t maps = 0;
+  std::unique_ptr<rocksdb::Iterator> it(db_->NewIterator({}, descriptors_cf_));
+  for (it->SeekToFirst(); it->Valid(); it->Next()) {
+    const std::string key = it->key().ToString();
+    const auto slash = key.find('/');
+    CollectionState* state = slash == std::string::npos ? nullptr : FindCollection(key.substr(0, slash));
+    internal::IndexedMap indexed;
+    if (state == nullptr || !indexed.ParseFromArray(it->value().data(), static_cast<int>(it->value().size()))) {
+      return Status::Corruption("descriptor record '" + key + "' has no collection or does not parse");
     }
-    internal::CollectionRecord& record = record_it->second;
-    if (meta->map_id().empty()) meta->set_map_id(AutoMapId(record.next_auto_id()));
-    record.set_next_auto_id(record.next_auto_id() + 1);
-    meta->set_point_count(static_cast<uint32_t>(map.map().x_size()));
-
-    const std::string key = MapKey(collection, meta->map_id());
-    // A replaced map stops counting: either earlier in this batch or stored.
-    if (auto previous = written.find(key); previous != written.end()) {
-      record.set_maps(record.maps() - 1);
-      record.set_points(record.points() - previous->second->metadata().point_count());
-    } else {
-      Result<v1::MapMetadata> old = ReadMetadata(key);
-      if (old.ok()) {
-        record.set_maps(record.maps() - 1);
-        record.set_points(record.points() - old->point_count());
-      } else if (old.status().code() != Status::Code::kNotFound) {
-        return old.status();
-      }
-    }
-    record.set_maps(record.maps() + 1);
-    record.set_points(record.points() + meta->point_count());
-    written[key] = &map;
-    batch.Put(maps_cf_, key, map.SerializeAsString());
-    batch.Put(metadata_cf_, key, meta->SerializeAsString());
+    Result<Lmd> lmd = DecodeLmd(indexed.lmd());
+    if (!lmd.ok()) return Status::Corruption("descriptor of " + key + ": " + lmd.status().message());
+    Status added = state->index.Add(indexed.index_id(), *lmd);
+    if (!added.ok()) return Status::Corruption("indexing " + key + ": " + added.message());
+    state->map_ids[indexed.index_id()] = key.substr(slash + 1);
+    if (++maps % 100000 == 0) spdlog::info("rebuilding indexes: {} maps", maps);
   }
-  if (collections_.size() + new_collections > max_collections) {
-    return Status::ResourceExhausted("max_collections (" + std::to_string(max_collections) +
-                                     ") reached: cannot create another collection");
-  }
-  for (const auto& [name, record] : changed) batch.Put(collections_cf_, name, record.SerializeAsString());
-  rocksdb::WriteOptions write_options;
-  write_options.sync = sync_writes_;
-  Status status = FromRocks(db_->Write(write_options, &batch), "writing maps");
+  Status status = FromRocks(it->status(), "reading descriptors");
   if (!status.ok()) return status;
-  for (auto& [name, record] : changed) collections_[name] = record;
+  for (const auto& [name, state] : collections_) {
+    if (state->index.size() != state->record.maps() || state->index.PostingCount() != state->record.postings()) {
+      return Status::Corruption("collection '" + name + "' is inconsistent: " + std::to_string(state->record.maps()) +
+                                " maps and " + std::to_string(state->record.postings()) + " postings counted, " +
+                                std::to_string(state->index.size()) + " maps and " +
+                                std::to_string(state->index.PostingCount()) + " postings indexed");
+    }
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  spdlog::info("indexes rebuilt: {} maps in {} collections in {:.2f} s", maps, collections_.size(), seconds);
   return Status::Ok();
+}
+
+CollectionState* MapStore::FindCollection(const std::string& collection) const {
+  const auto it = collections_.find(collection);
+  return it == collections_.end() ? nullptr : it->second.get();
+}
+
+Result<internal::IndexedMap> MapStore::ReadIndexed(const std::string& key) const {
+  std::string value;
+  const rocksdb::Status read = db_->Get({}, descriptors_cf_, key, &value);
+  if (read.IsNotFound()) return Status::NotFound("no descriptor for " + key);
+  if (!read.ok()) return FromRocks(read, "reading descriptor of " + key);
+  internal::IndexedMap indexed;
+  if (!indexed.ParseFromString(value)) return Status::Corruption("descriptor of " + key + " does not parse");
+  return indexed;
 }
 
 Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
@@ -168,41 +213,179 @@ Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
   return meta;
 }
 
+Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collections) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Counters change on copies, published only once the batch is written.
+  std::map<std::string, internal::CollectionRecord> records;
+  std::map<std::string, IndexChange> changes;
+  std::map<std::string, std::pair<uint64_t, const MapWrite*>> written;  // key -> (index id, map) in this batch
+  rocksdb::WriteBatch batch;
+  size_t new_collections = 0;
+
+  // Deletes a stored or earlier-in-batch map's postings and uncounts it.
+  auto remove_old = [&](const std::string& collection, const std::string& key,
+                        internal::CollectionRecord* record) -> Status {
+    uint64_t old_id = 0;
+    Lmd old_lmd;
+    uint32_t old_points = 0;
+    if (auto earlier = written.find(key); earlier != written.end()) {
+      old_id = earlier->second.first;
+      old_lmd = earlier->second.second->lmd;
+      old_points = earlier->second.second->map.metadata().point_count();
+      auto& added = changes[collection].added;
+      added.erase(std::remove_if(added.begin(), added.end(), [&](const auto& a) { return a.first == old_id; }),
+                  added.end());
+    } else {
+      Result<internal::IndexedMap> indexed = ReadIndexed(key);
+      if (!indexed.ok()) return indexed.status().code() == Status::Code::kNotFound ? Status::Ok() : indexed.status();
+      Result<Lmd> decoded = DecodeLmd(indexed->lmd());
+      Result<v1::MapMetadata> meta = ReadMetadata(key);
+      if (!decoded.ok() || !meta.ok()) return Status::Corruption("stored map " + key + " is damaged");
+      old_id = indexed->index_id();
+      old_lmd = std::move(decoded).value();
+      old_points = meta->point_count();
+      changes[collection].removed.push_back(old_id);
+    }
+    Result<std::vector<PostingRecord>> old_postings = PostingsOf(old_id, old_lmd, indexing_.index);
+    if (!old_postings.ok()) return old_postings.status();
+    for (const auto& posting : *old_postings) batch.Delete(postings_cf_, collection + "/" + posting.key);
+    record->set_maps(record->maps() - 1);
+    record->set_points(record->points() - old_points);
+    record->set_postings(record->postings() - old_lmd.features.size());
+    return Status::Ok();
+  };
+
+  for (MapWrite& write : *maps) {
+    v1::MapMetadata* meta = write.map.mutable_metadata();
+    const std::string collection = meta->collection();
+    auto record_it = records.find(collection);
+    if (record_it == records.end()) {
+      const CollectionState* state = FindCollection(collection);
+      if (state == nullptr) ++new_collections;
+      record_it = records.emplace(collection, state ? state->record : internal::CollectionRecord()).first;
+    }
+    internal::CollectionRecord& record = record_it->second;
+    if (meta->map_id().empty()) meta->set_map_id(AutoMapId(record.next_auto_id()));
+    record.set_next_auto_id(record.next_auto_id() + 1);
+    meta->set_point_count(static_cast<uint32_t>(write.map.map().x_size()));
+    const std::string key = MapKey(collection, meta->map_id());
+
+    Status removed = remove_old(collection, key, &record);
+    if (!removed.ok()) return removed;
+
+    const uint64_t index_id = record.next_index_id();
+    record.set_next_index_id(index_id + 1);
+    Result<std::vector<PostingRecord>> postings = PostingsOf(index_id, write.lmd, indexing_.index);
+    if (!postings.ok()) return Status::Internal("indexing map " + key + ": " + postings.status().message());
+    internal::IndexedMap indexed;
+    indexed.set_index_id(index_id);
+    indexed.set_lmd(EncodeLmd(write.lmd));
+    indexed.set_postings(static_cast<uint32_t>(write.lmd.features.size()));
+    batch.Put(maps_cf_, key, write.map.SerializeAsString());
+    batch.Put(metadata_cf_, key, meta->SerializeAsString());
+    batch.Put(descriptors_cf_, key, indexed.SerializeAsString());
+    for (const auto& posting : *postings) batch.Put(postings_cf_, collection + "/" + posting.key, posting.value);
+    record.set_maps(record.maps() + 1);
+    record.set_points(record.points() + meta->point_count());
+    record.set_postings(record.postings() + write.lmd.features.size());
+    written[key] = {index_id, &write};
+    changes[collection].added.push_back({index_id, &write});
+  }
+  if (collections_.size() + new_collections > max_collections) {
+    return Status::ResourceExhausted("max_collections (" + std::to_string(max_collections) +
+                                     ") reached: cannot create another collection");
+  }
+  for (const auto& [name, record] : records) batch.Put(collections_cf_, name, record.SerializeAsString());
+  rocksdb::WriteOptions write_options;
+  write_options.sync = sync_writes_;
+  Status status = FromRocks(db_->Write(write_options, &batch), "writing maps");
+  if (!status.ok()) return status;
+
+  // Durable: now publish counters and index changes.
+  for (auto& [name, record] : records) {
+    auto& state = collections_[name];
+    if (!state) state = std::make_unique<CollectionState>(indexing_.index);
+    state->record = record;
+    const IndexChange& change = changes[name];
+    std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
+    for (uint64_t id : change.removed) {
+      state->index.Remove(id);
+      state->map_ids.erase(id);
+    }
+    for (const auto& [id, write] : change.added) {
+      Status added = state->index.Add(id, write->lmd);
+      if (!added.ok()) return Status::Internal("index out of step with the store: " + added.message());
+      state->map_ids[id] = write->map.metadata().map_id();
+    }
+  }
+  return Status::Ok();
+}
+
 Result<v1::StoredMap> MapStore::GetMap(const std::string& collection, const std::string& map_id) const {
   if (!HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
   std::string value;
   const rocksdb::Status read = db_->Get({}, maps_cf_, MapKey(collection, map_id), &value);
-  if (read.IsNotFound()) {
-    return Status::NotFound("no map '" + map_id + "' in collection '" + collection + "'");
-  }
+  if (read.IsNotFound()) return Status::NotFound("no map '" + map_id + "' in collection '" + collection + "'");
   if (!read.ok()) return FromRocks(read, "reading map " + map_id);
   v1::StoredMap map;
   if (!map.ParseFromString(value)) return Status::Corruption("stored map '" + map_id + "' does not parse");
   return map;
 }
 
-Status MapStore::DeleteMap(const std::string& collection, const std::string& map_id) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto record_it = collections_.find(collection);
-  if (record_it == collections_.end()) return Status::NotFound("unknown collection '" + collection + "'");
-  const std::string key = MapKey(collection, map_id);
-  Result<v1::MapMetadata> old = ReadMetadata(key);
-  if (!old.ok()) {
-    if (old.status().code() != Status::Code::kNotFound) return old.status();
+Result<v1::MapMetadata> MapStore::GetMetadata(const std::string& collection, const std::string& map_id) const {
+  Result<v1::MapMetadata> meta = ReadMetadata(MapKey(collection, map_id));
+  if (!meta.ok() && meta.status().code() == Status::Code::kNotFound) {
     return Status::NotFound("no map '" + map_id + "' in collection '" + collection + "'");
   }
-  internal::CollectionRecord record = record_it->second;
+  return meta;
+}
+
+Result<Lmd> MapStore::GetDescriptor(const std::string& collection, const std::string& map_id) const {
+  if (!HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
+  Result<internal::IndexedMap> indexed = ReadIndexed(MapKey(collection, map_id));
+  if (!indexed.ok()) {
+    if (indexed.status().code() != Status::Code::kNotFound) return indexed.status();
+    return Status::NotFound("no map '" + map_id + "' in collection '" + collection + "'");
+  }
+  return DecodeLmd(indexed->lmd());
+}
+
+Status MapStore::DeleteMap(const std::string& collection, const std::string& map_id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  CollectionState* state = FindCollection(collection);
+  if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
+  const std::string key = MapKey(collection, map_id);
+  Result<v1::MapMetadata> meta = ReadMetadata(key);
+  if (!meta.ok()) {
+    if (meta.status().code() != Status::Code::kNotFound) return meta.status();
+    return Status::NotFound("no map '" + map_id + "' in collection '" + collection + "'");
+  }
+  Result<internal::IndexedMap> indexed = ReadIndexed(key);
+  if (!indexed.ok()) return indexed.status();
+  Result<Lmd> lmd = DecodeLmd(indexed->lmd());
+  if (!lmd.ok()) return Status::Corruption("descriptor of " + key + ": " + lmd.status().message());
+  Result<std::vector<PostingRecord>> postings = PostingsOf(indexed->index_id(), *lmd, indexing_.index);
+  if (!postings.ok()) return postings.status();
+
+  internal::CollectionRecord record = state->record;
   record.set_maps(record.maps() - 1);
-  record.set_points(record.points() - old->point_count());
+  record.set_points(record.points() - meta->point_count());
+  record.set_postings(record.postings() - lmd->features.size());
   rocksdb::WriteBatch batch;
   batch.Delete(maps_cf_, key);
   batch.Delete(metadata_cf_, key);
+  batch.Delete(descriptors_cf_, key);
+  for (const auto& posting : *postings) batch.Delete(postings_cf_, collection + "/" + posting.key);
   batch.Put(collections_cf_, collection, record.SerializeAsString());
   rocksdb::WriteOptions write_options;
   write_options.sync = sync_writes_;
   Status status = FromRocks(db_->Write(write_options, &batch), "deleting map " + map_id);
-  if (status.ok()) record_it->second = record;
-  return status;
+  if (!status.ok()) return status;
+  state->record = record;
+  std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
+  state->index.Remove(indexed->index_id());
+  state->map_ids.erase(indexed->index_id());
+  return Status::Ok();
 }
 
 Status MapStore::ListMaps(const std::string& collection, const std::string& after, uint32_t limit,
@@ -228,6 +411,23 @@ Status MapStore::ListMaps(const std::string& collection, const std::string& afte
   return FromRocks(it->status(), "listing maps");
 }
 
+Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, const Lmd& query,
+                                                 const RetrieveOptions& options) const {
+  const CollectionState* state = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  Result<std::vector<MapHit>> hits = state->index.Retrieve(query, options);
+  if (!hits.ok()) return hits.status();
+  std::vector<StoreHit> out;
+  out.reserve(hits->size());
+  for (const MapHit& hit : *hits) out.push_back({state->map_ids.at(hit.map_id), hit});
+  return out;
+}
+
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {
   std::error_code error;
   if (std::filesystem::exists(directory, error)) {
@@ -249,13 +449,13 @@ Result<uint64_t> MapStore::Backup(const std::string& directory) const {
 std::vector<v1::CollectionInfo> MapStore::ListCollections() const {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<v1::CollectionInfo> infos;
-  for (const auto& [name, record] : collections_) infos.push_back(ToInfo(name, record));
+  for (const auto& [name, state] : collections_) infos.push_back(ToInfo(name, state->record));
   return infos;
 }
 
 bool MapStore::HasCollection(const std::string& collection) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return collections_.count(collection) > 0;
+  return FindCollection(collection) != nullptr;
 }
 
 }  // namespace lmd::server

@@ -1,23 +1,38 @@
-// MapStore: lmdd's durable store of local maps, on an embedded RocksDB.
+// MapStore: lmdd's durable store of local maps on an embedded RocksDB, and
+// the in-memory index of every collection rebuilt from it.
 //
-// Column families: "maps" (key "<collection>/<map id>" -> lmd.v1.StoredMap),
-// "metadata" (same key -> lmd.v1.MapMetadata, so listing reads no points),
-// "collections" (collection name -> lmd.internal.CollectionRecord) and "meta"
-// (store format version). Every insert or delete is one WriteBatch holding the
-// maps and the collection counters it changes, so a map is either wholly
-// stored and counted or absent. Thread-safe: writes are serialised by
-// write_mutex_; reads go to RocksDB directly.
+// Column families, keys "<collection>/<map id>" unless said otherwise:
+//   maps         -> lmd.v1.StoredMap (points, trajectory, scans, metadata)
+//   metadata     -> lmd.v1.MapMetadata (so listing reads no points)
+//   descriptors  -> lmd.internal.IndexedMap (index id + encoded LMD)
+//   postings     "<collection>/" + posting key (core/index/postings.h) -> value
+//   collections  collection name -> lmd.internal.CollectionRecord (counters)
+//   meta         "format", "indexing" (fingerprint of the indexing settings)
+// Every insert or delete is ONE WriteBatch holding all of that for its maps,
+// so a map is either wholly stored, described, indexed and counted, or
+// absent. The in-memory index is changed only after the batch is written.
+// At open the indexes are rebuilt from the descriptors and checked against
+// the counters; a mismatch is reported, never repaired by deleting data.
+//
+// Concurrency: writers are serialised by mutex_ (RocksDB serialises its WAL
+// anyway); each collection's index has a readers-writer lock, so queries run
+// concurrently with each other and wait only for the short in-memory part of
+// a write (adding postings), never for RocksDB I/O.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "core/index/retrieve_options.h"
 #include "core/status.h"
+#include "core/types.h"
 #include "lmd/internal/store.pb.h"
 #include "lmd/v1/lmd.pb.h"
+#include "server/indexing.h"
 
 namespace rocksdb {
 class ColumnFamilyHandle;
@@ -29,12 +44,28 @@ namespace lmd::server {
 struct MapStoreOptions {
   std::string data_dir;      // created if absent
   bool sync_writes = false;  // fsync the WAL before a write returns
+  IndexingConfig indexing;   // must match the store's (checked at open)
 };
+
+// A map to insert with its descriptor (computed by the caller, outside locks).
+struct MapWrite {
+  v1::StoredMap map;
+  Lmd lmd;
+};
+
+// A retrieved map: its id in the collection and the index's hit.
+struct StoreHit {
+  std::string map_id;
+  MapHit hit;
+};
+
+struct CollectionState;
 
 class MapStore {
  public:
-  // Opens (creating if needed) the store in options.data_dir. IoError or
-  // Corruption with RocksDB's message if it cannot; never deletes data.
+  // Opens (creating if needed) the store and rebuilds its indexes. IoError or
+  // Corruption with the reason if it cannot (unreadable, other format or
+  // indexing settings, inconsistent counters); never deletes data.
   static Result<std::unique_ptr<MapStore>> Open(const MapStoreOptions& options);
   ~MapStore();
   MapStore(const MapStore&) = delete;
@@ -44,17 +75,21 @@ class MapStore {
   // it explicitly before main returns. Idempotent.
   Status Close();
 
-  // Writes all maps in one batch, durably (WAL) before returning. Empty map
-  // ids are assigned ("m" + 12 digits, increasing per collection) and written
-  // back into *maps; an existing id is replaced. Collections are created on
+  // Writes all maps in one batch, durably (WAL) before returning, then
+  // indexes them. Empty map ids are assigned ("m" + 12 digits, increasing per
+  // collection) and written back into *maps; an existing id is replaced
+  // (its old postings removed in the same batch). Collections are created on
   // first insert; ResourceExhausted if that would exceed max_collections.
-  // Maps must already be valid (see validate.h).
-  Status InsertMaps(std::vector<v1::StoredMap>* maps, uint32_t max_collections);
+  Status InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collections);
 
   // NotFound naming the collection or the map if absent.
   Result<v1::StoredMap> GetMap(const std::string& collection, const std::string& map_id) const;
+  // The stored metadata of a map. NotFound if absent.
+  Result<v1::MapMetadata> GetMetadata(const std::string& collection, const std::string& map_id) const;
+  // The stored descriptor of a map. NotFound as GetMap.
+  Result<Lmd> GetDescriptor(const std::string& collection, const std::string& map_id) const;
 
-  // Deletes one map. NotFound naming the collection or map if absent.
+  // Deletes one map with its descriptor and postings. NotFound if absent.
   Status DeleteMap(const std::string& collection, const std::string& map_id);
 
   // Up to `limit` maps' metadata in id order, starting after `after` (empty:
@@ -62,6 +97,11 @@ class MapStore {
   // empty. NotFound for an unknown collection.
   Status ListMaps(const std::string& collection, const std::string& after, uint32_t limit,
                   std::vector<v1::MapMetadata>* out, std::string* next) const;
+
+  // The collection's best maps for `query` (see core/index/index.h).
+  // NotFound for an unknown collection; InvalidArgument for bad options.
+  Result<std::vector<StoreHit>> Retrieve(const std::string& collection, const Lmd& query,
+                                         const RetrieveOptions& options) const;
 
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in
@@ -73,23 +113,33 @@ class MapStore {
   std::vector<v1::CollectionInfo> ListCollections() const;
   bool HasCollection(const std::string& collection) const;
 
+  const IndexingConfig& indexing() const { return indexing_; }
+
  private:
-  MapStore() = default;
+  MapStore();
+  Status CheckMeta(const std::string& data_dir);
   Status LoadCollections();
-  // The stored metadata of `key`, or NotFound.
+  Status RebuildIndexes();
+  // The state of a collection, or nullptr. States are never removed, so the
+  // pointer stays valid while the store is open.
+  CollectionState* FindCollection(const std::string& collection) const;
+  Result<internal::IndexedMap> ReadIndexed(const std::string& key) const;
   Result<v1::MapMetadata> ReadMetadata(const std::string& key) const;
 
   rocksdb::DB* db_ = nullptr;
   rocksdb::ColumnFamilyHandle* maps_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* metadata_cf_ = nullptr;
+  rocksdb::ColumnFamilyHandle* descriptors_cf_ = nullptr;
+  rocksdb::ColumnFamilyHandle* postings_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* collections_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* meta_cf_ = nullptr;
   bool sync_writes_ = false;
+  IndexingConfig indexing_;
 
+  // Serialises writers; also guards the map below (not the states' indexes,
+  // which have their own locks) and every CollectionState::record.
   mutable std::mutex mutex_;
-  // State below is protected by mutex_: a cache of the "collections" column
-  // family, changed only together with it.
-  std::map<std::string, internal::CollectionRecord> collections_;
+  std::map<std::string, std::unique_ptr<CollectionState>> collections_;
 };
 
 }  // namespace lmd::server

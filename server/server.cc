@@ -76,7 +76,10 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
     if (!auth.ok()) return auth.status();
     *server->auth_ = std::move(auth).value();
   }
-  Result<std::unique_ptr<MapStore>> store = MapStore::Open({config.data_dir, config.sync_writes});
+  MapStoreOptions store_options;
+  store_options.data_dir = config.data_dir;
+  store_options.sync_writes = config.sync_writes;
+  Result<std::unique_ptr<MapStore>> store = MapStore::Open(store_options);
   if (!store.ok()) return store.status();
   server->store_ = std::move(store).value();
 

@@ -235,15 +235,6 @@ TEST_F(MapServiceTest, LimitsOnPointsAndBatchSizeNameTheLimit) {
   EXPECT_NE(status.error_message().find("max_maps_per_batch"), std::string::npos);
 }
 
-TEST_F(MapServiceTest, RetrieveIsUnimplementedUntilTheIndexLands) {
-  TestServer server(dir_.path());
-  v1::RetrieveRequest request;
-  request.set_collection("site");
-  *request.mutable_map() = SquareRoomMap();
-  v1::RetrieveResponse response;
-  EXPECT_EQ(server.client().Retrieve(request, &response).error_code(), grpc::StatusCode::UNIMPLEMENTED);
-}
-
 TEST_F(MapServiceTest, RemoteAddressWithoutSecurityIsRefused) {
   server::ServerConfig config;
   config.listen = "0.0.0.0:0";

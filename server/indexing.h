@@ -1,0 +1,29 @@
+// How lmdd turns a local map into what it indexes: the viewpoint planner,
+// the describer and the index options, fixed for a store. The fingerprint of
+// these settings is saved in the store when it is created; a store made with
+// other settings is refused (its descriptors would not be comparable), never
+// rewritten.
+#pragma once
+
+#include <string>
+
+#include "core/describe/describer.h"
+#include "core/index/retrieve_options.h"
+#include "core/types.h"
+#include "core/viewpoint/viewpoint.h"
+
+namespace lmd::server {
+
+struct IndexingConfig {
+  ViewpointOptions viewpoint;  // planner: the product default
+  DescriberOptions describer;  // paper setting #1, 10-bit words
+  IndexOptions index;          // W = 5 m, L = 2
+};
+
+// The planned frame and descriptor of `map` (in its own frame).
+Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config);
+
+// One line naming every setting that changes stored descriptors or postings.
+std::string Fingerprint(const IndexingConfig& config);
+
+}  // namespace lmd::server

@@ -1,0 +1,150 @@
+// Retrieve and DetectChanges of LmdServiceImpl: describe the query map the
+// way the store's maps were described, ask the collection's index, and (for
+// changes) run the change detector against each hit's stored descriptor.
+#include "core/align/relative_pose.h"
+#include "proto/convert.h"
+#include "server/indexing.h"
+#include "server/lmd_service.h"
+#include "server/validate.h"
+
+namespace lmd::server {
+namespace {
+
+constexpr uint32_t kDefaultTopK = 10;
+
+// The core method for a wire method, or InvalidArgument if this store's
+// index cannot serve it (it indexes one planner's descriptors).
+Result<Method> CoreMethod(v1::Method method, Planner indexed_planner) {
+  switch (method) {
+    case v1::METHOD_DEFAULT: return Method::kLmd;
+    case v1::METHOD_BOW: return Method::kBow;
+    case v1::METHOD_LMD_COR:
+    case v1::METHOD_LMD_COG: {
+      const Planner wanted = method == v1::METHOD_LMD_COR ? Planner::kCoR : Planner::kCoG;
+      if (wanted != indexed_planner) {
+        return Status::InvalidArgument(std::string(v1::Method_Name(method)) + " is not served: this lmdd indexes " +
+                                       PlannerName(indexed_planner) + " viewpoints");
+      }
+      return Method::kLmd;
+    }
+    default: return Status::InvalidArgument("unknown method " + std::to_string(method));
+  }
+}
+
+}  // namespace
+
+Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collection, const v1::LocalMap& map,
+                                                       uint32_t top_k, v1::Method method) const {
+  Status valid = ValidateCollectionName(collection);
+  if (valid.ok()) valid = ValidateLocalMap(map, config_, "query map");
+  if (!valid.ok()) return valid;
+  if (top_k > config_.max_top_k) {
+    return Status::InvalidArgument("top_k " + std::to_string(top_k) + " exceeds max_top_k (" +
+                                   std::to_string(config_.max_top_k) + ")");
+  }
+  Result<Method> core_method = CoreMethod(method, store_->indexing().viewpoint.planner);
+  if (!core_method.ok()) return core_method.status();
+  if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
+
+  Query query;
+  query.lmd = DescribeForIndex(FromProto(map), store_->indexing());
+  RetrieveOptions options;
+  options.top_k = top_k == 0 ? kDefaultTopK : top_k;
+  options.method = *core_method;
+  Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options);
+  if (!hits.ok()) return hits.status();
+  query.hits = std::move(hits).value();
+  return query;
+}
+
+Result<v1::MapHit> LmdServiceImpl::ToWireHit(const std::string& collection, const Query& query,
+                                             const StoreHit& hit, const Lmd* db, v1::Method method) const {
+  v1::MapHit out;
+  out.set_rank(static_cast<uint32_t>(hit.hit.rank + 1));
+  out.set_map_id(hit.map_id);
+  out.set_score(hit.hit.score);
+  out.set_orientation_deg(static_cast<uint32_t>(hit.hit.orientation * 90));
+  out.set_offset_x(hit.hit.offset.x);
+  out.set_offset_y(hit.hit.offset.y);
+  Result<v1::MapMetadata> meta = store_->GetMetadata(collection, hit.map_id);
+  if (meta.ok()) *out.mutable_metadata() = std::move(meta).value();  // absent if deleted meanwhile
+  if (db != nullptr && method != v1::METHOD_BOW) {
+    *out.mutable_pose() = ToProto(RelativePose(query.lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset));
+  }
+  return out;
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* context,
+                                                   const v1::RetrieveRequest* request,
+                                                   v1::RetrieveResponse* response) {
+  return runner_->Unary(context, "Retrieve", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method());
+    if (!query.ok()) return query.status();
+    for (const StoreHit& hit : query->hits) {
+      if (context->IsCancelled()) return Status::Cancelled("call cancelled");
+      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.map_id);
+      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, hit, db.ok() ? &*db : nullptr,
+                                          request->method());
+      if (!wire.ok()) return wire.status();
+      *response->add_hits() = std::move(wire).value();
+    }
+    return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerContext* context,
+                                                        const v1::DetectChangesRequest* request,
+                                                        v1::DetectChangesResponse* response) {
+  return runner_->Unary(context, "DetectChanges", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    if (!(request->threshold() >= 0)) return Status::InvalidArgument("threshold must be >= 0 (0: the default)");
+    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method());
+    if (!query.ok()) return query.status();
+    if (context->IsCancelled()) return Status::Cancelled("call cancelled");
+
+    std::vector<Lmd> dbs;  // descriptors of the hits still stored
+    std::vector<const StoreHit*> kept;
+    dbs.reserve(query->hits.size());
+    for (const StoreHit& hit : query->hits) {
+      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.map_id);
+      if (!db.ok()) continue;  // deleted since retrieval
+      dbs.push_back(std::move(db).value());
+      kept.push_back(&hit);
+    }
+    std::vector<ChangeCandidate> candidates;
+    for (size_t i = 0; i < kept.size(); ++i) candidates.push_back({kept[i]->hit, &dbs[i]});
+    ChangeDetectorOptions options;
+    if (request->threshold() > 0) options.threshold = request->threshold();
+    Result<std::vector<ChangeMask>> masks = lmd::DetectChanges(query->lmd, candidates, options);
+    if (!masks.ok()) return masks.status();
+
+    std::vector<size_t> per_hit(kept.size(), 0);
+    std::vector<v1::ChangeHit*> wire_hits;
+    for (size_t i = 0; i < kept.size(); ++i) {
+      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, *kept[i], &dbs[i], request->method());
+      if (!wire.ok()) return wire.status();
+      v1::ChangeHit* change_hit = response->add_hits();
+      *change_hit->mutable_hit() = std::move(wire).value();
+      wire_hits.push_back(change_hit);
+    }
+    uint32_t rank = 0;
+    for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r
+      size_t i = 0;
+      while (i < kept.size() && kept[i]->hit.map_id != mask.db_map_id) ++i;
+      if (i == kept.size()) continue;
+      if (request->max_masks_per_hit() > 0 && per_hit[i] >= request->max_masks_per_hit()) continue;
+      ++per_hit[i];
+      v1::ChangeMask* wire = wire_hits[i]->add_masks();
+      wire->set_rank(++rank);
+      wire->set_score(mask.score);
+      for (const Point2& p : mask.points) {
+        wire->add_x(static_cast<float>(p.x));
+        wire->add_y(static_cast<float>(p.y));
+      }
+    }
+    return Status::Ok();
+  });
+}
+
+}  // namespace lmd::server

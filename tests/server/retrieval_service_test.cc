@@ -1,0 +1,163 @@
+// Retrieve and DetectChanges over gRPC: real results on stored maps, and the
+// right status for bad queries.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+// An L-shaped corridor corner with a doorway: enough structure for a planner
+// and descriptor to work on, shifted by (dx, dy) in its own frame.
+v1::LocalMap CornerMap(double dx, double dy) {
+  v1::LocalMap map;
+  auto wall = [&](double x0, double y0, double x1, double y1) {
+    const double length = std::hypot(x1 - x0, y1 - y0);
+    for (double t = 0; t <= length; t += 0.05) {
+      map.add_x(static_cast<float>(x0 + (x1 - x0) * t / length + dx));
+      map.add_y(static_cast<float>(y0 + (y1 - y0) * t / length + dy));
+    }
+  };
+  wall(0, 0, 8, 0);
+  wall(0, 2, 6, 2);
+  wall(6, 2, 6, 8);
+  wall(8, 0, 8, 3.5);
+  wall(8, 4.5, 8, 8);
+  wall(9.5, 3.5, 9.5, 4.5);
+  v1::Pose2* pose = map.add_trajectory();
+  pose->set_x(1 + dx);
+  pose->set_y(1 + dy);
+  return map;
+}
+
+class RetrievalServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server_ = std::make_unique<TestServer>(dir_.path());
+    v1::InsertMapsRequest request;
+    *request.add_maps() = OneMapRequest("site", "corner", CornerMap(0, 0)).maps(0);
+    *request.add_maps() = OneMapRequest("site", "room", SquareRoomMap(200)).maps(0);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server_->client().InsertMaps(request, &inserted).ok());
+  }
+
+  v1::RetrieveRequest Query(const v1::LocalMap& map, uint32_t top_k = 5) {
+    v1::RetrieveRequest request;
+    request.set_collection("site");
+    *request.mutable_map() = map;
+    request.set_top_k(top_k);
+    return request;
+  }
+
+  TempDir dir_;
+  std::unique_ptr<TestServer> server_;
+};
+
+TEST_F(RetrievalServiceTest, ShiftedCopyFindsItsMapWithThePose) {
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(3.0, -1.0)), &response).ok());
+  ASSERT_GE(response.hits_size(), 1);
+  EXPECT_EQ(response.hits(0).map_id(), "corner");
+  EXPECT_EQ(response.hits(0).rank(), 1u);
+  EXPECT_GT(response.hits(0).score(), 0.0);
+  EXPECT_EQ(response.hits(0).metadata().collection(), "site");
+  ASSERT_TRUE(response.hits(0).has_pose());
+  // The query's frame sits at (-3, +1) in the stored map's frame, unrotated
+  // (the planned viewpoints align up to the offset bins).
+  EXPECT_NEAR(response.hits(0).pose().x(), -3.0, 0.5);
+  EXPECT_NEAR(response.hits(0).pose().y(), 1.0, 0.5);
+  EXPECT_NEAR(std::remainder(response.hits(0).pose().theta(), 2 * M_PI), 0.0, 0.05);
+}
+
+TEST_F(RetrievalServiceTest, BowHasNoPose) {
+  v1::RetrieveRequest request = Query(CornerMap(0, 0));
+  request.set_method(v1::METHOD_BOW);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  ASSERT_GE(response.hits_size(), 1);
+  EXPECT_FALSE(response.hits(0).has_pose());
+}
+
+TEST_F(RetrievalServiceTest, DeletedMapIsNoLongerRetrieved) {
+  v1::DeleteMapRequest del;
+  del.set_collection("site");
+  del.set_map_id("corner");
+  ASSERT_TRUE(server_->client().DeleteMap(del).ok());
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(0, 0)), &response).ok());
+  for (const auto& hit : response.hits()) EXPECT_NE(hit.map_id(), "corner");
+}
+
+TEST_F(RetrievalServiceTest, IndexIsRebuiltAfterRestart) {
+  v1::RetrieveResponse before;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(1, 1)), &before).ok());
+  server_.reset();
+  server_ = std::make_unique<TestServer>(dir_.path());
+  v1::RetrieveResponse after;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(1, 1)), &after).ok());
+  ASSERT_EQ(after.hits_size(), before.hits_size());
+  for (int i = 0; i < after.hits_size(); ++i) {
+    EXPECT_EQ(after.hits(i).map_id(), before.hits(i).map_id());
+    EXPECT_DOUBLE_EQ(after.hits(i).score(), before.hits(i).score());
+  }
+}
+
+TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
+  v1::RetrieveResponse response;
+  grpc::Status status = server_->client().Retrieve(Query(CornerMap(0, 0), 1000000), &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("max_top_k"), std::string::npos) << status.error_message();
+
+  status = server_->client().Retrieve(Query(v1::LocalMap()), &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("no points"), std::string::npos);
+
+  v1::RetrieveRequest unknown = Query(CornerMap(0, 0));
+  unknown.set_collection("nowhere");
+  EXPECT_EQ(server_->client().Retrieve(unknown, &response).error_code(), grpc::StatusCode::NOT_FOUND);
+
+  v1::RetrieveRequest cog = Query(CornerMap(0, 0));
+  cog.set_method(v1::METHOD_LMD_COG);
+  status = server_->client().Retrieve(cog, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
+}
+
+TEST_F(RetrievalServiceTest, TopKZeroMeansTheDefault) {
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(0, 0), 0), &response).ok());
+  EXPECT_GE(response.hits_size(), 1);
+  EXPECT_LE(response.hits_size(), 10);
+}
+
+TEST_F(RetrievalServiceTest, DetectChangesFindsAnAddedObject) {
+  v1::LocalMap changed = CornerMap(0, 0);
+  for (double x = 2.0; x <= 3.0; x += 0.05) {  // a 1 m x 0.6 m box in the corridor
+    for (double y : {0.7, 1.3}) {
+      changed.add_x(static_cast<float>(x));
+      changed.add_y(static_cast<float>(y));
+    }
+  }
+  v1::DetectChangesRequest request;
+  request.set_collection("site");
+  *request.mutable_map() = changed;
+  request.set_top_k(1);
+  v1::DetectChangesResponse response;
+  ASSERT_TRUE(server_->client().DetectChanges(request, &response).ok());
+  ASSERT_EQ(response.hits_size(), 1);
+  EXPECT_EQ(response.hits(0).hit().map_id(), "corner");
+  ASSERT_GE(response.hits(0).masks_size(), 1);
+  const v1::ChangeMask& top = response.hits(0).masks(0);
+  EXPECT_EQ(top.rank(), 1u);
+  bool near_box = false;
+  for (int i = 0; i < top.x_size(); ++i) near_box |= std::hypot(top.x(i) - 2.5, top.y(i) - 1.0) < 1.5;
+  EXPECT_TRUE(near_box) << "top mask at (" << top.x(0) << ", " << top.y(0) << ")";
+
+  request.set_threshold(-1);
+  EXPECT_EQ(server_->client().DetectChanges(request, &response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+}  // namespace
+}  // namespace lmd::testing
