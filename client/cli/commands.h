@@ -32,5 +32,6 @@ int ListMapsCommand(const CommandContext& ctx);
 int CollectionsCommand(const CommandContext& ctx);
 int StatsCommand(const CommandContext& ctx);
 int BackupCommand(const CommandContext& ctx);
+int DemoCommand(const CommandContext& ctx);
 
 }  // namespace lmd::cli

@@ -17,6 +17,7 @@ constexpr char kUsage[] =
     "  list --collection C                                         list a collection's maps (alias: maps)\n"
     "  collections                                                 list collections\n"
     "  stats [--collection C]                                      server and collection statistics\n"
+    "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 
@@ -28,6 +29,7 @@ const std::map<std::string, Command>& Commands() {
       {"delete", DeleteCommand},   {"list", ListMapsCommand},
       {"maps", ListMapsCommand},   {"collections", CollectionsCommand},
       {"stats", StatsCommand},     {"backup", BackupCommand},
+      {"demo", DemoCommand},
   };
   return commands;
 }
