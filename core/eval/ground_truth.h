@@ -13,6 +13,7 @@ namespace lmd {
 struct GroundTruthOptions {
   double min_travel_gap_m = 10.0;  // m; candidates start more than this away (paper: 10)
   double max_mean_dist_m = 0.5;    // m; a query counts if the best mean is below (paper: 0.5)
+  size_t threads = 0;              // worker threads; 0 = hardware concurrency (at most 8)
 };
 
 // One counted query.

@@ -19,7 +19,9 @@ struct Segment {
 // A door: where a route may leave a corridor to visit a room.
 struct Door {
   Point2 corridor_point;  // on the corridor centreline, in front of the door
-  Point2 room_centre;     // free point inside the room (kept clear of clutter)
+  Point2 door_centre;     // middle of the opening in the wall
+  Point2 room_centre;     // free point inside the room; the polyline
+                          //   corridor_point -> door_centre -> room_centre is clear
 };
 
 // The free-space skeleton of one building, used by the route planner.
@@ -73,7 +75,8 @@ struct WorldOptions {
   double door_width_m = 1.0;        // m
   double clutter_per_room = 1.5;    // mean clutter boxes per room (0.3..1 m)
   double oblique_fraction = 0.15;   // fraction of rooms with an oblique wall
-  double pillar_probability = 0.3;  // chance a corridor crossing has pillars
+  double corridor_clutter_probability = 0.3;  // chance a corridor stretch has a box by a wall
+  double hall_probability = 0.15;   // chance a block is one hall with pillars, not rooms
 };
 
 // A world with options.buildings buildings; building k is
