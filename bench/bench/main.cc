@@ -1,13 +1,18 @@
-// lmd-bench: index scale and server load benchmarks.
+// lmd-bench: index scale and load benchmarks.
 #include <cstdio>
 #include <string>
 
+#include "bench/bench/index_bench.h"
+
 int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
-  if (command == "-h" || command == "--help") {
-    std::printf("usage: lmd-bench <command> [options]\n");
-    return 0;
+  if (command == "index") return lmd::bench::RunIndexBench(argc - 2, argv + 2);
+  if (command.empty() || command == "-h" || command == "--help") {
+    std::printf("usage: lmd-bench <command> [options]\n"
+                "commands:\n"
+                "  index --maps N [--queries Q] [--json]   inverted file vs exhaustive scorer on simulated maps\n");
+    return command.empty() ? 2 : 0;
   }
-  std::fprintf(stderr, "lmd-bench: no benchmark command is implemented yet\n");
+  std::fprintf(stderr, "lmd-bench: unknown command '%s' (try --help)\n", command.c_str());
   return 2;
 }

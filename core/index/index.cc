@@ -18,6 +18,7 @@ struct RetrieveScratch {
   std::vector<uint32_t> touched;
   std::vector<uint32_t> word_touched;
   std::vector<uint32_t> word_counts;
+  std::vector<uint64_t> keys;
   KernelScratch kernel;
 };
 
@@ -145,49 +146,134 @@ void Index::ForEachMap(const std::function<void(uint64_t, const std::vector<Pose
     if (slot_used_[s]) fn(slot_id_[s], slot_features_[s]);
 }
 
-Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOptions& options) const {
+Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOptions& options,
+                                            RetrieveStats* stats) const {
+  RetrieveStats local;
+  if (stats == nullptr) stats = &local;
+  *stats = RetrieveStats();
   Status st = ValidateRetrieveOptions(options);
   if (!st.ok()) return st;
   auto features = ToPoseFeatures(query, options_);
   if (!features.ok()) return features.status();
   const PreparedQuery q = PrepareQuery(std::move(features).value(), options_, options);
-  if (options.method == Method::kBow) return RetrieveBow(q, options.top_k);
-  return RetrieveLmd(q, options.top_k);
+  if (options.method == Method::kBow) return RetrieveBow(q, options.top_k, stats);
+  return RetrieveLmd(q, options.top_k, stats);
 }
 
-std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k) const {
+std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.counts.size() < slot_id_.size() * 4) sc.counts.resize(slot_id_.size() * 4, 0);
   sc.touched.clear();
   uint32_t* counts = sc.counts.data();
   const int32_t box = q.max_offset;
+  const int levels = q.levels;
   const size_t nq = q.features.size();
-  // Pass 1: per orientation and query feature, count the maps holding its word
-  // in a level-0 cell that meets the offset box (one count per map and cell).
-  for (int o = 0; o < 4; ++o) {
-    for (size_t i = 0; i < nq; ++i) {
-      const uint32_t word = q.features[i].word;
-      const int32_t x = q.rx[o][i], y = q.ry[o][i];
-      const int32_t cx0 = FloorDiv(x - box, cell0_), cx1 = FloorDiv(x + box, cell0_);
-      const int32_t cy0 = FloorDiv(y - box, cell0_), cy1 = FloorDiv(y + box, cell0_);
-      for (int32_t cx = cx0; cx <= cx1; ++cx) {
-        for (int32_t cy = cy0; cy <= cy1; ++cy) {
-          if (!InInt16(cx) || !InInt16(cy)) continue;
-          auto it = lists_.find(PostingKey(word, cx, cy));
-          if (it == lists_.end()) continue;
-          uint32_t previous = kNoSlot;
-          for (const Posting& p : it->second) {
-            if (p.slot == previous) continue;  // a map's postings in one list are adjacent
-            previous = p.slot;
-            uint32_t* c = counts + 4 * static_cast<size_t>(p.slot);
-            if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(p.slot);
-            ++c[o];
+  // gain[l] = 2^L * (w_0 + ... + w_l): what a query feature adds to 2^L * raw K
+  // when a same-word db feature lies in a level-l cell meeting its box
+  // (cells nest, so every coarser level is met too).
+  uint32_t gain[9];
+  for (int l = 0; l <= levels; ++l) gain[l] = (l == 0 ? 1u : gain[l - 1] + (1u << (l - 1)));
+  // A term = (query feature, orientation) with its box in cells of every level.
+  struct Term {
+    int o;
+    int32_t lo_x[9], hi_x[9], lo_y[9], hi_y[9];
+  };
+  std::vector<Term> terms;
+  std::vector<uint64_t>& keys = sc.keys;
+  std::vector<const Term*> active;
+  std::vector<uint8_t> finest;
+  std::vector<uint32_t> table;
+  // Pass 1, per distinct query word: read each posting list that can matter
+  // once; per map and term, add the gain of the finest level met.
+  for (size_t i = 0; i < nq;) {
+    const uint32_t word = q.features[i].word;
+    size_t e = i + 1;
+    while (e < nq && q.features[e].word == word) ++e;
+    terms.clear();
+    keys.clear();
+    for (int o = 0; o < 4; ++o) {
+      for (size_t k = i; k < e; ++k) {
+        Term t;
+        t.o = o;
+        const int32_t x = q.rx[o][k], y = q.ry[o][k];
+        for (int l = 0; l <= levels; ++l) {
+          const int32_t cw = q.cell0 >> l;
+          t.lo_x[l] = FloorDiv(x - box, cw);
+          t.hi_x[l] = FloorDiv(x + box, cw);
+          t.lo_y[l] = FloorDiv(y - box, cw);
+          t.hi_y[l] = FloorDiv(y + box, cw);
+        }
+        for (int32_t cx = t.lo_x[0]; cx <= t.hi_x[0]; ++cx)
+          for (int32_t cy = t.lo_y[0]; cy <= t.hi_y[0]; ++cy)
+            if (InInt16(cx) && InInt16(cy)) keys.push_back(PostingKey(word, cx, cy));
+        terms.push_back(t);
+      }
+    }
+    i = e;
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    for (uint64_t key : keys) {
+      auto it = lists_.find(key);
+      if (it == lists_.end()) continue;
+      const int32_t cx = static_cast<int16_t>((key >> 16) & 0xFFFF), cy = static_cast<int16_t>(key & 0xFFFF);
+      active.clear();
+      for (const Term& t : terms)
+        if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) active.push_back(&t);
+      // The cell splits into side x side finest cells. For each active term and
+      // finest cell: the finest level met (finest[a * cells + sub]); per finest
+      // cell: the gains summed per orientation (table[sub * 4 + o]).
+      const int32_t side = 1 << levels, cells = side * side;
+      const int32_t cw_fine = q.cell0 >> levels;
+      finest.assign(active.size() * static_cast<size_t>(cells), 0);
+      table.assign(static_cast<size_t>(cells) * 4, 0);
+      for (size_t a = 0; a < active.size(); ++a) {
+        const Term& t = *active[a];
+        for (int32_t sx = 0; sx < side; ++sx) {
+          for (int32_t sy = 0; sy < side; ++sy) {
+            int met = 0;
+            for (int l = 1; l <= levels; ++l) {
+              const int32_t px = (cx * side + sx) >> (levels - l), py = (cy * side + sy) >> (levels - l);
+              if (px < t.lo_x[l] || px > t.hi_x[l] || py < t.lo_y[l] || py > t.hi_y[l]) break;
+              met = l;
+            }
+            const int32_t sub = sx * side + sy;
+            finest[a * static_cast<size_t>(cells) + static_cast<size_t>(sub)] = static_cast<uint8_t>(met);
+            table[static_cast<size_t>(sub) * 4 + static_cast<size_t>(t.o)] += gain[met];
           }
         }
       }
+      const std::vector<Posting>& list = it->second;
+      ++stats->lists_read;
+      stats->postings_read += list.size();
+      auto sub_of = [&](const Posting& p) {
+        return (FloorDiv(p.x, cw_fine) - cx * side) * side + (FloorDiv(p.y, cw_fine) - cy * side);
+      };
+      for (size_t r = 0; r < list.size();) {
+        const uint32_t slot = list[r].slot;
+        size_t re = r + 1;
+        while (re < list.size() && list[re].slot == slot) ++re;  // a map's postings are adjacent
+        uint32_t* c = counts + 4 * static_cast<size_t>(slot);
+        if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(slot);
+        if (re == r + 1) {
+          const uint32_t* g = &table[static_cast<size_t>(sub_of(list[r])) * 4];
+          c[0] += g[0];
+          c[1] += g[1];
+          c[2] += g[2];
+          c[3] += g[3];
+        } else {
+          // Several features of one map: each term counts once, at its finest level.
+          for (size_t a = 0; a < active.size(); ++a) {
+            int met = 0;
+            for (size_t k = r; k < re; ++k)
+              met = std::max<int>(met, finest[a * static_cast<size_t>(cells) + static_cast<size_t>(sub_of(list[k]))]);
+            c[active[a]->o] += gain[met];
+          }
+        }
+        r = re;
+      }
     }
   }
-  // Upper bound of each touched map's score (pyramid_kernel.h), counters reset.
+  // Upper bound of each touched map's score (see index.h), counters reset.
   struct Candidate {
     double bound;
     uint64_t id;
@@ -195,19 +281,20 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k) con
   };
   std::vector<Candidate> heap;
   heap.reserve(sc.touched.size());
+  const double inv_scale = std::ldexp(1.0, -levels);
   for (uint32_t slot : sc.touched) {
     uint32_t* c = counts + 4 * static_cast<size_t>(slot);
-    const size_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
+    const uint32_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
     c[0] = c[1] = c[2] = c[3] = 0;
     const size_t nd = slot_features_[slot].size();
-    const double bound = NormalizeScore(static_cast<double>(std::min(best, std::min(nq, nd))), nq, nd,
-                                        q.normalization);
-    heap.push_back({bound, slot_id_[slot], slot});
+    const double raw = std::min(static_cast<double>(best) * inv_scale, static_cast<double>(std::min(nq, nd)));
+    heap.push_back({NormalizeScore(raw, nq, nd, q.normalization), slot_id_[slot], slot});
   }
   auto lower = [](const Candidate& a, const Candidate& b) {
     if (a.bound != b.bound) return a.bound < b.bound;
     return a.id > b.id;
   };
+  stats->maps_touched = heap.size();
   std::make_heap(heap.begin(), heap.end(), lower);
   // Pass 2: exact scores, best bound first, until no bound can reach the top k.
   TopHits top(top_k);
@@ -216,6 +303,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k) con
     if (top.full() && next.bound < top.kth_score()) break;
     std::pop_heap(heap.begin(), heap.end(), lower);
     heap.pop_back();
+    ++stats->maps_scored;
     const auto& db = slot_features_[next.slot];
     const KernelScore s = ScoreLmdMap(q, db.data(), db.size(), &sc.kernel);
     MapHit hit;
@@ -228,7 +316,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k) con
   return top.Take();
 }
 
-std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k) const {
+std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.counts.size() < slot_id_.size()) sc.counts.resize(slot_id_.size(), 0);
   if (sc.word_counts.size() < slot_id_.size()) sc.word_counts.resize(slot_id_.size(), 0);
@@ -246,7 +334,10 @@ std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k) con
     if (keys == word_keys_.end()) continue;
     sc.word_touched.clear();
     for (uint64_t key : keys->second) {
-      for (const Posting& p : lists_.find(key)->second) {
+      const auto& list = lists_.find(key)->second;
+      ++stats->lists_read;
+      stats->postings_read += list.size();
+      for (const Posting& p : list) {
         if (word_count[p.slot]++ == 0) sc.word_touched.push_back(p.slot);
       }
     }
@@ -256,6 +347,7 @@ std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k) con
       word_count[slot] = 0;
     }
   }
+  stats->maps_touched = stats->maps_scored = sc.touched.size();
   TopHits top(top_k);
   for (uint32_t slot : sc.touched) {
     MapHit hit;

@@ -10,13 +10,20 @@
 // 1024 words, so word-only lists would hold ~every map; the pose cell makes a
 // query read a few percent of all postings.
 //
-// Retrieval is exact: one pass over those lists gives every map an upper bound
-// of its K (count of query features with a same-word posting in their cells,
-// capped by min(|q|, |d|), normalised; see pyramid_kernel.h). Maps are then
-// scored exactly, best bound first, with the same ScoreLmdMap as the
-// exhaustive scorer, until the next bound is below the k-th best score.
+// Retrieval is exact. Pass 1 reads, once per distinct query word, the lists
+// of the level-0 cells that meet any of that word's boxes (4 orientations x
+// the query features with the word) and gives every map an upper bound of its
+// raw K per orientation: each (query feature, orientation) adds
+// w_0 + ... + w_l where l is the finest level at which a same-word posting of
+// the map lies in a cell meeting the box (I^l counts a query feature at most
+// once, and only if such a posting exists, because the shifted feature stays
+// in the box). The bound is min(that, min(|q|, |d|)), normalised like K.
+// Pass 2 scores maps exactly, best bound first, with the same ScoreLmdMap as
+// the exhaustive scorer, until the next bound is below the k-th best score.
 // Scores, orientations, offsets and ranks are therefore identical to
 // RetrieveExhaustive's (tests/core/index_test.cc checks it on random data).
+// The bound's gains are tabulated per list and finest cell, so pass 1 costs
+// one table look-up and four adds per posting.
 // Hits are ordered by score (descending), then map id (ascending); maps
 // scoring 0 are never returned.
 //
@@ -37,6 +44,14 @@
 
 namespace lmd {
 
+// What one Retrieve did (for benchmarks and tuning).
+struct RetrieveStats {
+  size_t lists_read = 0;     // posting lists scanned
+  size_t postings_read = 0;  // postings scanned
+  size_t maps_touched = 0;   // maps with at least one posting read (candidates)
+  size_t maps_scored = 0;    // candidates scored exactly before the bound stopped
+};
+
 class Index {
  public:
   // InvalidArgument if the options are invalid (retrieve_options.h).
@@ -54,7 +69,9 @@ class Index {
 
   // Top options.top_k maps for `query`, ranked (MapHit::rank = 0 is best).
   // InvalidArgument for bad options or a query feature that is not a pose word.
-  Result<std::vector<MapHit>> Retrieve(const Lmd& query, const RetrieveOptions& options = {}) const;
+  // `stats`, when not null, receives what the query read.
+  Result<std::vector<MapHit>> Retrieve(const Lmd& query, const RetrieveOptions& options = {},
+                                       RetrieveStats* stats = nullptr) const;
 
   size_t size() const { return id_to_slot_.size(); }
   bool Contains(uint64_t id) const { return id_to_slot_.count(id) != 0; }
@@ -76,8 +93,8 @@ class Index {
 
  private:
   explicit Index(const IndexOptions& options);
-  std::vector<MapHit> RetrieveLmd(const PreparedQuery& q, size_t top_k) const;
-  std::vector<MapHit> RetrieveBow(const PreparedQuery& q, size_t top_k) const;
+  std::vector<MapHit> RetrieveLmd(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
+  std::vector<MapHit> RetrieveBow(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
 
   struct Posting {
     uint32_t slot;

@@ -8,8 +8,8 @@ namespace lmd {
 Status ValidateIndexOptions(const IndexOptions& o) {
   if (!(o.pose_quantum_m > 0.0) || !std::isfinite(o.pose_quantum_m))
     return Status::InvalidArgument("pose_quantum_m must be > 0");
-  if (o.pyramid_levels < 0 || o.pyramid_levels > 8)
-    return Status::InvalidArgument("pyramid_levels must be in [0, 8]");
+  if (o.pyramid_levels < 0 || o.pyramid_levels > 4)
+    return Status::InvalidArgument("pyramid_levels must be in [0, 4]");
   if (!(o.pyramid_cell_m > 0.0) || !std::isfinite(o.pyramid_cell_m))
     return Status::InvalidArgument("pyramid_cell_m must be > 0");
   const double units = o.pyramid_cell_m / o.pose_quantum_m;

@@ -29,9 +29,10 @@ struct Collection {
   std::vector<Lmd> queries;
 };
 
+// Views are shifted by up to 0.5 m per axis (the default max offset).
 Collection MakeCollection(uint64_t seed, int places, int views, int queries, int features) {
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> shift(-1.5, 1.5);
+  std::uniform_real_distribution<double> shift(-0.5, 0.5);
   Collection c;
   for (int p = 0; p < places; ++p) c.places.push_back(RandomLmd(rng, features));
   for (int p = 0; p < places; ++p)
@@ -81,6 +82,30 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
   }
 }
 
+TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeForAnyPyramidAndOffsetBox) {
+  Collection c = MakeCollection(12, 30, 3, 6, 60);
+  for (int levels : {0, 1, 3, 4}) {
+    for (double cell : {2.4, 6.4}) {
+      IndexOptions io;
+      io.pyramid_levels = levels;
+      io.pyramid_cell_m = cell;
+      Index index = MakeIndex(io);
+      for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
+      for (double max_offset : {0.0, 0.5, 2.0, 6.0}) {
+        RetrieveOptions options;
+        options.max_offset_m = max_offset;
+        options.offset_bin_m = 0.25;
+        for (const Lmd& q : c.queries) {
+          auto inverted = index.Retrieve(q, options);
+          auto exhaustive = RetrieveExhaustive(index, q, options);
+          ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+          ExpectSameHits(*inverted, *exhaustive);
+        }
+      }
+    }
+  }
+}
+
 TEST(IndexTest, InvertedFileAgreesWithExhaustiveWhenMapsShareNoPlace) {
   // All maps random: many near-equal low scores, where ties and the pruning
   // bound matter most.
@@ -120,10 +145,12 @@ TEST(IndexTest, RotatedAndShiftedCopyGetsOrientationAndOffset) {
   const Lmd db = RandomLmd(rng, 120);
   ASSERT_TRUE(index.Add(42, db).ok());
   for (uint64_t m = 0; m < 100; ++m) ASSERT_TRUE(index.Add(100 + m, RandomLmd(rng, 120)).ok());
+  RetrieveOptions options;
+  options.max_offset_m = 2.0;
   for (int k : {0, 1, 2, 3}) {
     const double tx = 0.8 - 0.5 * k, ty = -1.3 + 0.7 * k;
     const Lmd query = TransformedCopy(db, k, tx, ty, rng, 0.03, 0.8);
-    auto hits = index.Retrieve(query);
+    auto hits = index.Retrieve(query, options);
     ASSERT_TRUE(hits.ok());
     ASSERT_FALSE(hits->empty());
     EXPECT_EQ((*hits)[0].map_id, 42u) << "k=" << k;

@@ -1,0 +1,250 @@
+// lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]
+//                 [--top-k K] [--max-offset M] [--method lmd|bow]
+// Builds an index of N simulated local maps (simulator -> planner ->
+// describer), runs Q queries through the inverted file and the exhaustive
+// scorer in the same process, and reports p50 latencies, their ratio, whether
+// every top-K agreed (ids, scores, orientations, offsets, ranks) and bytes per
+// stored map (encoded Lmd + posting records). With --json the last stdout line
+// is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
+// "bytes_per_map": z}. Progress goes to stderr.
+#include "bench/bench/index_bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench/bench/sim_descriptors.h"
+#include "core/describe/lmd_codec.h"
+#include "core/index/exhaustive.h"
+#include "core/index/index.h"
+#include "core/index/postings.h"
+#include "core/util/progress_bar.h"
+
+namespace lmd::bench {
+namespace {
+
+struct Args {
+  size_t maps = 1000;
+  size_t queries = 50;
+  bool json = false;
+  uint64_t seed = 1;
+  int threads = 0;
+  RetrieveOptions retrieve;
+};
+
+void Usage() {
+  std::fprintf(stderr,
+               "usage: lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]\n"
+               "                       [--top-k K] [--max-offset M] [--method lmd|bow]\n");
+}
+
+bool ParseArgs(int argc, char** argv, Args* args) {
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "lmd-bench index: %s needs a value\n", name);
+        return nullptr;
+      }
+      return argv[++i];
+    };
+    auto number = [&](const char* name, double lo, double hi, double* out) {
+      const char* v = value(name);
+      if (v == nullptr) return false;
+      char* end = nullptr;
+      *out = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(*out >= lo && *out <= hi)) {
+        std::fprintf(stderr, "lmd-bench index: %s must be a number in [%g, %g], got '%s'\n", name, lo, hi, v);
+        return false;
+      }
+      return true;
+    };
+    double x = 0;
+    if (a == "--json") {
+      args->json = true;
+    } else if (a == "--maps") {
+      if (!number("--maps", 1, 1e7, &x)) return false;
+      args->maps = static_cast<size_t>(x);
+    } else if (a == "--queries") {
+      if (!number("--queries", 1, 1e5, &x)) return false;
+      args->queries = static_cast<size_t>(x);
+    } else if (a == "--seed") {
+      if (!number("--seed", 0, 1e15, &x)) return false;
+      args->seed = static_cast<uint64_t>(x);
+    } else if (a == "--threads") {
+      if (!number("--threads", 1, 256, &x)) return false;
+      args->threads = static_cast<int>(x);
+    } else if (a == "--top-k") {
+      if (!number("--top-k", 1, 1e6, &x)) return false;
+      args->retrieve.top_k = static_cast<size_t>(x);
+    } else if (a == "--max-offset") {
+      if (!number("--max-offset", 0, 100, &x)) return false;
+      args->retrieve.max_offset_m = x;
+    } else if (a == "--method") {
+      const char* v = value("--method");
+      if (v == nullptr) return false;
+      if (std::strcmp(v, "lmd") == 0) {
+        args->retrieve.method = Method::kLmd;
+      } else if (std::strcmp(v, "bow") == 0) {
+        args->retrieve.method = Method::kBow;
+      } else {
+        std::fprintf(stderr, "lmd-bench index: --method must be lmd or bow, got '%s'\n", v);
+        return false;
+      }
+    } else if (a == "-h" || a == "--help") {
+      Usage();
+      std::exit(0);
+    } else {
+      std::fprintf(stderr, "lmd-bench index: unknown option '%s'\n", a.c_str());
+      Usage();
+      return false;
+    }
+  }
+  return true;
+}
+
+double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+bool SameHits(const std::vector<MapHit>& a, const std::vector<MapHit>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i].map_id != b[i].map_id || a[i].score != b[i].score || a[i].orientation != b[i].orientation ||
+        a[i].offset.x != b[i].offset.x || a[i].offset.y != b[i].offset.y || a[i].rank != b[i].rank)
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int RunIndexBench(int argc, char** argv) {
+  Args args;
+  if (!ParseArgs(argc, argv, &args)) return 2;
+  if (args.threads == 0) args.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+  // 1. Descriptors of simulated local maps.
+  SimDescriptorOptions sim;
+  sim.maps = args.maps;
+  sim.queries = args.queries;
+  sim.seed = args.seed;
+  sim.threads = args.threads;
+  SimDescriptors data;
+  {
+    ProgressBar bar("simulate + describe maps", args.maps);
+    data = SimulateDescriptors(sim, [&](size_t done, size_t) { bar.Update(done); });
+    bar.Done();
+  }
+  if (data.maps.size() < args.maps)
+    std::fprintf(stderr, "lmd-bench index: the simulator gave %zu maps of %zu\n", data.maps.size(), args.maps);
+
+  // 2. Index, encoded sizes.
+  auto created = Index::Create();
+  if (!created.ok()) return 1;
+  Index index = std::move(created).value();
+  size_t lmd_bytes = 0, posting_bytes = 0, features = 0;
+  const auto add_start = std::chrono::steady_clock::now();
+  double add_ms = 0;
+  {
+    ProgressBar bar("index maps", data.maps.size());
+    for (size_t n = 0; n < data.maps.size(); ++n) {
+      const Lmd& lmd = data.maps[n];
+      lmd_bytes += EncodeLmd(lmd).size();
+      auto records = PostingsOf(n, lmd, index.options());
+      if (!records.ok()) {
+        std::fprintf(stderr, "lmd-bench index: map %zu: %s\n", n, records.status().ToString().c_str());
+        return 1;
+      }
+      posting_bytes += PostingBytes(*records);
+      features += lmd.features.size();
+      const auto t0 = std::chrono::steady_clock::now();
+      Status st = index.Add(n, lmd);
+      add_ms += Ms(t0, std::chrono::steady_clock::now());
+      if (!st.ok()) {
+        std::fprintf(stderr, "lmd-bench index: map %zu: %s\n", n, st.ToString().c_str());
+        return 1;
+      }
+      if (n % 1024 == 0) bar.Update(n);
+    }
+    bar.Done();
+  }
+  (void)add_start;
+  const double nmaps = static_cast<double>(std::max<size_t>(1, data.maps.size()));
+
+  // 3. Queries: inverted file and exhaustive scorer, same queries, same process.
+  std::vector<double> inverted_ms, exhaustive_ms, touched, scored, postings;
+  size_t agree = 0, source_found = 0;
+  (void)index.Retrieve(data.queries.empty() ? Lmd() : data.queries[0], args.retrieve);  // warm-up
+  {
+    ProgressBar bar("queries", data.queries.size());
+    for (size_t q = 0; q < data.queries.size(); ++q) {
+      RetrieveStats stats;
+      const auto t0 = std::chrono::steady_clock::now();
+      auto inverted = index.Retrieve(data.queries[q], args.retrieve, &stats);
+      const auto t1 = std::chrono::steady_clock::now();
+      auto exhaustive = RetrieveExhaustive(index, data.queries[q], args.retrieve);
+      const auto t2 = std::chrono::steady_clock::now();
+      if (!inverted.ok() || !exhaustive.ok()) {
+        std::fprintf(stderr, "lmd-bench index: query %zu failed\n", q);
+        return 1;
+      }
+      inverted_ms.push_back(Ms(t0, t1));
+      exhaustive_ms.push_back(Ms(t1, t2));
+      touched.push_back(static_cast<double>(stats.maps_touched));
+      scored.push_back(static_cast<double>(stats.maps_scored));
+      postings.push_back(static_cast<double>(stats.postings_read));
+      agree += SameHits(*inverted, *exhaustive);
+      for (const MapHit& h : *inverted) source_found += h.map_id == data.query_sources[q];
+      bar.Update(q + 1);
+    }
+    bar.Done();
+  }
+  const double inv_p50 = Percentile(inverted_ms, 0.5), exh_p50 = Percentile(exhaustive_ms, 0.5);
+  const bool all_agree = agree == data.queries.size();
+  const double bytes_per_map = static_cast<double>(lmd_bytes + posting_bytes) / nmaps;
+
+  std::printf("lmd-bench index: %zu maps (seed %llu), %zu queries, top-%zu, method %s, max offset %.2f m\n",
+              data.maps.size(), static_cast<unsigned long long>(args.seed), data.queries.size(),
+              args.retrieve.top_k, args.retrieve.method == Method::kLmd ? "lmd" : "bow",
+              args.retrieve.max_offset_m);
+  std::printf("  build: simulate %.1f s, plan + describe %.1f s (%d threads, %.2f ms/map), index add %.2f s\n",
+              data.simulate_s, data.describe_s, args.threads, 1000.0 * data.describe_s / nmaps, add_ms / 1000.0);
+  std::printf("  features per map        %.1f\n", static_cast<double>(features) / nmaps);
+  std::printf("  bytes per stored map    %.0f (encoded Lmd %.0f + posting records %.0f)\n", bytes_per_map,
+              static_cast<double>(lmd_bytes) / nmaps, static_cast<double>(posting_bytes) / nmaps);
+  std::printf("  index memory per map    %.0f bytes (%zu postings)\n",
+              static_cast<double>(index.MemoryBytes()) / nmaps, index.PostingCount());
+  std::printf("  query latency           p50 ms    p90 ms\n");
+  std::printf("    inverted file         %8.3f  %8.3f\n", inv_p50, Percentile(inverted_ms, 0.9));
+  std::printf("    exhaustive scorer     %8.3f  %8.3f\n", exh_p50, Percentile(exhaustive_ms, 0.9));
+  std::printf("  speed-up (p50)          %.1fx\n", inv_p50 > 0 ? exh_p50 / inv_p50 : 0.0);
+  std::printf("  top-%zu identical        %s (%zu of %zu queries)\n", args.retrieve.top_k,
+              all_agree ? "yes" : "NO", agree, data.queries.size());
+  std::printf("  per query (p50)         %.0f postings read (%.1f%% of all), %.0f maps touched, %.0f scored exactly\n",
+              Percentile(postings, 0.5),
+              100.0 * Percentile(postings, 0.5) / static_cast<double>(std::max<size_t>(1, index.PostingCount())),
+              Percentile(touched, 0.5), Percentile(scored, 0.5));
+  std::printf("  re-observed map in top-%zu: %zu of %zu queries\n", args.retrieve.top_k, source_found,
+              data.queries.size());
+  if (args.json) {
+    std::printf("{\"maps\": %zu, \"indexed_ms_p50\": %.4f, \"exhaustive_ms_p50\": %.4f, \"top10_agree\": %s, "
+                "\"bytes_per_map\": %.1f}\n",
+                data.maps.size(), inv_p50, exh_p50, all_agree ? "true" : "false", bytes_per_map);
+  }
+  return all_agree ? 0 : 1;
+}
+
+}  // namespace lmd::bench
