@@ -33,5 +33,9 @@ int CollectionsCommand(const CommandContext& ctx);
 int StatsCommand(const CommandContext& ctx);
 int BackupCommand(const CommandContext& ctx);
 int DemoCommand(const CommandContext& ctx);
+int IngestCommand(const CommandContext& ctx);
+int QueryCommand(const CommandContext& ctx);
+int ChangesCommand(const CommandContext& ctx);
+int RenderCommand(const CommandContext& ctx);
 
 }  // namespace lmd::cli

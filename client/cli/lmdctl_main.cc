@@ -16,9 +16,15 @@ constexpr char kUsage[] =
     "  delete --collection C --id ID                               delete a stored map\n"
     "  list --collection C                                         list a collection's maps (alias: maps)\n"
     "  collections                                                 list collections\n"
+    "  ingest --collection C --log FILE [--robot R]                local maps of a CARMEN log (5 m every 1 m), inserted\n"
+    "  query --collection C QUERY [--top-k N] [--method M]         stored maps showing the query's place\n"
+    "  changes --collection C QUERY [--top-k N] [--method M]       hits with their ranked change masks\n"
+    "  render --collection C QUERY --out FILE.svg                  picture of the top hit and its changes\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
+    "QUERY is --file POINTS or --log FILE --map K; M is default, lmd-cor, lmd-cog or bow;\n"
+    "--length / --step (m) change the local maps built from a log (5 and 1).\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 
 using Command = int (*)(const CommandContext&);
@@ -29,7 +35,9 @@ const std::map<std::string, Command>& Commands() {
       {"delete", DeleteCommand},   {"list", ListMapsCommand},
       {"maps", ListMapsCommand},   {"collections", CollectionsCommand},
       {"stats", StatsCommand},     {"backup", BackupCommand},
-      {"demo", DemoCommand},
+      {"demo", DemoCommand},       {"ingest", IngestCommand},
+      {"query", QueryCommand},     {"changes", ChangesCommand},
+      {"render", RenderCommand},
   };
   return commands;
 }

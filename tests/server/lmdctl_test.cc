@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/io/carmen_writer.h"
+#include "core/sim/simulate.h"
 #include "tests/server/test_server.h"
 
 namespace lmd::testing {
@@ -88,6 +90,57 @@ TEST_F(LmdctlTest, UnreachableServerFailsCleanly) {
   CliRun run = RunLmdctl("--server 127.0.0.1:1 --timeout 2 collections", dir_);
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("UNAVAILABLE"), std::string::npos) << run.err;
+}
+
+}  // namespace
+}  // namespace lmd::testing
+
+namespace lmd::testing {
+namespace {
+
+class LmdctlLogTest : public LmdctlTest {
+ protected:
+  void SetUp() override {
+    LaserLog log = DefaultDemoLog();
+    log.scans.resize(std::min<size_t>(log.scans.size(), 60));  // ~30 m of travel: a short ingest
+    ASSERT_TRUE(WriteCarmenLog(dir_.path() + "/robot.log", log).ok());
+  }
+};
+
+TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  CliRun ingest = RunLmdctl(base + "--json ingest --collection fleet --log " + dir_.path() + "/robot.log", dir_);
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.err;
+  const int maps = CountLines(ingest.out);
+  ASSERT_GT(maps, 5);
+  EXPECT_EQ(ingest.out.rfind("{\"id\":\"robot-0\"", 0), 0u) << ingest.out;
+
+  CliRun listed = RunLmdctl(base + "--json maps --collection fleet", dir_);
+  ASSERT_EQ(listed.exit_code, 0) << listed.err;
+  EXPECT_EQ(CountLines(listed.out), maps);
+
+  CliRun query = RunLmdctl(base + "--json query --collection fleet --top-k 3 --log " + dir_.path() +
+                               "/robot.log --map 4", dir_);
+  ASSERT_EQ(query.exit_code, 0) << query.err;
+  EXPECT_NE(query.out.find("\"map_id\":\"robot-4\""), std::string::npos) << query.out;
+
+  CliRun render = RunLmdctl(base + "render --collection fleet --log " + dir_.path() + "/robot.log --map 4 --out " +
+                                dir_.path() + "/r.svg", dir_);
+  ASSERT_EQ(render.exit_code, 0) << render.err;
+  std::ifstream svg(dir_.path() + "/r.svg");
+  std::string first_line;
+  std::getline(svg, first_line);
+  EXPECT_NE(first_line.find("<svg"), std::string::npos) << first_line;
+}
+
+TEST_F(LmdctlLogTest, QueryNeedsExactlyOneSourceOfTheMap) {
+  CliRun run = RunLmdctl("query --collection fleet", dir_);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--file POINTS or as --log FILE --map K"), std::string::npos) << run.err;
+  run = RunLmdctl("ingest --collection fleet --log /nonexistent.log", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
 }
 
 }  // namespace

@@ -1,0 +1,164 @@
+// ingest, query, changes and render of lmdctl.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "client/cli/commands.h"
+#include "client/cli/output.h"
+#include "client/cli/query_map.h"
+#include "core/render/result_svg.h"
+#include "core/util/progress_bar.h"
+#include "proto/convert.h"
+
+namespace lmd::cli {
+namespace {
+
+Result<v1::Method> MethodFromArgs(const Args& args) {
+  const std::string name = args.Get("method", "default");
+  if (name == "default") return v1::METHOD_DEFAULT;
+  if (name == "lmd-cor") return v1::METHOD_LMD_COR;
+  if (name == "lmd-cog") return v1::METHOD_LMD_COG;
+  if (name == "bow") return v1::METHOD_BOW;
+  return Status::InvalidArgument("--method must be default, lmd-cor, lmd-cog or bow, got '" + name + "'");
+}
+
+// Fills the collection, map, top_k and method of a Retrieve or DetectChanges
+// request; 2 after printing a usage error, 1 after another error, else 0.
+template <typename Request>
+int FillQuery(const CommandContext& ctx, Request* request) {
+  request->set_collection(Required(ctx.args, "collection"));
+  if (request->collection().empty()) return 2;
+  Result<LocalMap> map = QueryMapFromArgs(ctx.args);
+  if (!map.ok()) return Fail(map.status().message(), map.status().code() == Status::Code::kInvalidArgument ? 2 : 1);
+  *request->mutable_map() = ToProto(*map);
+  Result<long> top_k = GetPositive(ctx.args, "top-k", 10);
+  if (!top_k.ok()) return Fail(top_k.status().message(), 2);
+  request->set_top_k(static_cast<uint32_t>(*top_k));
+  Result<v1::Method> method = MethodFromArgs(ctx.args);
+  if (!method.ok()) return Fail(method.status().message(), 2);
+  request->set_method(*method);
+  return 0;
+}
+
+void PrintHit(const v1::MapHit& hit) {
+  std::printf("%3u  %-24s K=%.4f  orientation=%3u deg  offset=(%.2f, %.2f) m", hit.rank(), hit.map_id().c_str(),
+              hit.score(), hit.orientation_deg(), hit.offset_x(), hit.offset_y());
+  if (hit.has_pose()) {
+    std::printf("  pose=(%.2f m, %.2f m, %.1f deg)", hit.pose().x(), hit.pose().y(), hit.pose().theta() * 180 / M_PI);
+  }
+  std::printf("\n");
+}
+
+}  // namespace
+
+int IngestCommand(const CommandContext& ctx) {
+  const std::string collection = Required(ctx.args, "collection");
+  if (collection.empty() || Required(ctx.args, "log").empty()) return 2;
+  Result<std::vector<LocalMap>> maps = LocalMapsFromLog(ctx.args);
+  if (!maps.ok()) return Fail(maps.status().message());
+  ProgressBar progress("ingest " + ctx.args.Get("log"), maps->size());
+  for (size_t i = 0; i < maps->size(); ++i) {
+    v1::InsertMapsRequest request;
+    v1::InsertMapRequest* insert = request.add_maps();
+    insert->mutable_metadata()->set_collection(collection);
+    insert->mutable_metadata()->set_map_id((*maps)[i].id);
+    insert->mutable_metadata()->set_robot_id(ctx.args.Get("robot"));
+    insert->mutable_metadata()->set_sequence(i);
+    *insert->mutable_map() = ToProto((*maps)[i]);
+    v1::InsertMapsResponse response;
+    const grpc::Status status = ctx.client.InsertMaps(request, &response);
+    if (!status.ok()) return FailCall(status);
+    if (ctx.json) {  // as soon as lmdd acknowledged it
+      std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
+                  collection.c_str(), response.maps(0).point_count());
+      std::fflush(stdout);
+    }
+    progress.Add();
+  }
+  progress.Done();
+  if (!ctx.json) std::printf("ingested %zu local maps into '%s'\n", maps->size(), collection.c_str());
+  return 0;
+}
+
+int QueryCommand(const CommandContext& ctx) {
+  v1::RetrieveRequest request;
+  if (int code = FillQuery(ctx, &request)) return code;
+  v1::RetrieveResponse response;
+  const grpc::Status status = ctx.client.Retrieve(request, &response);
+  if (!status.ok()) return FailCall(status);
+  for (const auto& hit : response.hits()) {
+    if (ctx.json) {
+      std::printf("%s\n", ToJsonLine(hit).c_str());
+    } else {
+      PrintHit(hit);
+    }
+  }
+  if (!ctx.json && response.hits_size() == 0) std::printf("no map of '%s' matches\n", request.collection().c_str());
+  return 0;
+}
+
+int ChangesCommand(const CommandContext& ctx) {
+  v1::DetectChangesRequest request;
+  if (int code = FillQuery(ctx, &request)) return code;
+  v1::DetectChangesResponse response;
+  const grpc::Status status = ctx.client.DetectChanges(request, &response);
+  if (!status.ok()) return FailCall(status);
+  for (const auto& hit : response.hits()) {
+    if (ctx.json) {
+      std::printf("%s\n", ToJsonLine(hit).c_str());
+      continue;
+    }
+    PrintHit(hit.hit());
+    for (const auto& mask : hit.masks()) {
+      double x = 0, y = 0;
+      for (int i = 0; i < mask.x_size(); ++i) {
+        x += mask.x(i) / mask.x_size();
+        y += mask.y(i) / mask.y_size();
+      }
+      std::printf("       change %-3u at (%.2f, %.2f) m, %d features, r=%.2f\n", mask.rank(), x, y, mask.x_size(),
+                  mask.score());
+    }
+  }
+  return 0;
+}
+
+int RenderCommand(const CommandContext& ctx) {
+  const std::string out = Required(ctx.args, "out");
+  if (out.empty()) return 2;
+  v1::DetectChangesRequest request;
+  if (int code = FillQuery(ctx, &request)) return code;
+  request.set_top_k(1);
+  v1::DetectChangesResponse response;
+  grpc::Status status = ctx.client.DetectChanges(request, &response);
+  if (!status.ok()) return FailCall(status);
+  if (response.hits_size() == 0 || !response.hits(0).hit().has_pose()) {
+    return Fail("no hit with a pose to render (method bow gives none)");
+  }
+  const v1::ChangeHit& top = response.hits(0);
+  v1::GetMapRequest get;
+  get.set_collection(request.collection());
+  get.set_map_id(top.hit().map_id());
+  v1::GetMapResponse stored;
+  status = ctx.client.GetMap(get, &stored);
+  if (!status.ok()) return FailCall(status);
+
+  const LocalMap query = FromProto(request.map());
+  const LocalMap db = FromProto(stored.map().map());
+  ResultPicture picture;
+  picture.query = &query;
+  picture.db = &db;
+  picture.query_in_db = FromProto(top.hit().pose());
+  for (const auto& mask : top.masks()) {
+    std::vector<Point2> points;
+    for (int i = 0; i < mask.x_size(); ++i) points.push_back({mask.x(i), mask.y(i)});
+    picture.masks.push_back(std::move(points));
+  }
+  picture.title = "query against " + request.collection() + "/" + top.hit().map_id();
+  std::ofstream file(out);
+  file << RenderResultSvg(picture);
+  if (!file) return Fail("cannot write " + out);
+  std::printf("wrote %s (top hit %s, %d change masks)\n", out.c_str(), top.hit().map_id().c_str(), top.masks_size());
+  return 0;
+}
+
+}  // namespace lmd::cli
