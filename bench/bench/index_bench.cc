@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <map>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -183,6 +184,18 @@ int RunIndexBench(int argc, char** argv) {
   }
   (void)add_start;
   const double nmaps = static_cast<double>(std::max<size_t>(1, data.maps.size()));
+  // Word statistics: how skewed the appearance words are decides how much any
+  // inverted file can prune (a word on every map matches every map).
+  std::map<uint32_t, size_t> word_counts;
+  for (const Lmd& lmd : data.maps)
+    for (const Feature& f : lmd.features) ++word_counts[f.appearance_word];
+  size_t top_word = 0;
+  double sum_p2 = 0;
+  for (const auto& kv : word_counts) {
+    top_word = std::max(top_word, kv.second);
+    const double p = static_cast<double>(kv.second) / static_cast<double>(std::max<size_t>(1, features));
+    sum_p2 += p * p;
+  }
 
   // 3. Queries: inverted file and exhaustive scorer, same queries, same process.
   std::vector<double> inverted_ms, exhaustive_ms, touched, scored, postings;
@@ -223,6 +236,10 @@ int RunIndexBench(int argc, char** argv) {
   std::printf("  build: simulate %.1f s, plan + describe %.1f s (%d threads, %.2f ms/map), index add %.2f s\n",
               data.simulate_s, data.describe_s, args.threads, 1000.0 * data.describe_s / nmaps, add_ms / 1000.0);
   std::printf("  features per map        %.1f\n", static_cast<double>(features) / nmaps);
+  std::printf("  appearance words        %zu distinct, most frequent %.1f%% of features, "
+              "%.0f same-word feature pairs per pair of maps\n",
+              word_counts.size(), 100.0 * static_cast<double>(top_word) / static_cast<double>(std::max<size_t>(1, features)),
+              sum_p2 * (static_cast<double>(features) / nmaps) * (static_cast<double>(features) / nmaps));
   std::printf("  bytes per stored map    %.0f (encoded Lmd %.0f + posting records %.0f)\n", bytes_per_map,
               static_cast<double>(lmd_bytes) / nmaps, static_cast<double>(posting_bytes) / nmaps);
   std::printf("  index memory per map    %.0f bytes (%zu postings)\n",

@@ -66,6 +66,8 @@ Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
     }
   }
   uint32_t slot;
+  if (free_slots_.empty() && slot_id_.size() >= kMaxMaps)
+    return Status::ResourceExhausted("an index holds at most 16777215 maps");
   if (!free_slots_.empty()) {
     slot = free_slots_.back();
     free_slots_.pop_back();
@@ -79,7 +81,9 @@ Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
     const uint64_t key = PostingKey(f.word, FloorDiv(f.x, cell0_), FloorDiv(f.y, cell0_));
     auto [it, inserted] = lists_.try_emplace(key);
     if (inserted) word_keys_[f.word].push_back(key);
-    it->second.push_back({slot, f.x, f.y});
+    const int32_t fine = cell0_ >> options_.pyramid_levels, side = 1 << options_.pyramid_levels;
+    const int32_t sx = (f.x - FloorDiv(f.x, cell0_) * cell0_) / fine, sy = (f.y - FloorDiv(f.y, cell0_) * cell0_) / fine;
+    it->second.push_back({(slot << 8) | static_cast<uint32_t>(sx * side + sy)});
   }
   posting_count_ += features.size();
   slot_id_[slot] = id;
@@ -103,7 +107,7 @@ bool Index::Remove(uint64_t id) {
     auto it = lists_.find(key);
     if (it == lists_.end()) continue;
     auto& list = it->second;
-    list.erase(std::remove_if(list.begin(), list.end(), [slot](const Posting& p) { return p.slot == slot; }),
+    list.erase(std::remove_if(list.begin(), list.end(), [slot](const Posting& p) { return p.slot() == slot; }),
                list.end());
     if (list.empty()) {
       lists_.erase(it);
@@ -127,7 +131,7 @@ size_t Index::CountPostingsOfMap(uint64_t id) const {
   }
   size_t n = 0;
   for (const auto& kv : lists_)
-    for (const Posting& p : kv.second) n += p.slot == found->second;
+    for (const Posting& p : kv.second) n += p.slot() == found->second;
   return n;
 }
 
@@ -181,7 +185,9 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
   std::vector<Term> terms;
   std::vector<uint64_t>& keys = sc.keys;
   std::vector<const Term*> active;
-  std::vector<uint8_t> finest;
+  // level_masks[(a * levels + l - 1) * 4 + w]: bit sub of word w set when term
+  // a meets level l in finest cell sub (256 cells at most: L <= 4).
+  std::vector<uint64_t> level_masks;
   std::vector<uint32_t> table;
   // Pass 1, per distinct query word: read each posting list that can matter
   // once; per map and term, add the gain of the finest level met.
@@ -220,11 +226,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
       for (const Term& t : terms)
         if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) active.push_back(&t);
       // The cell splits into side x side finest cells. For each active term and
-      // finest cell: the finest level met (finest[a * cells + sub]); per finest
-      // cell: the gains summed per orientation (table[sub * 4 + o]).
+      // level: the finest cells where the term meets that level (level_masks);
+      // per finest cell: the gains summed per orientation (table[sub * 4 + o]).
       const int32_t side = 1 << levels, cells = side * side;
-      const int32_t cw_fine = q.cell0 >> levels;
-      finest.assign(active.size() * static_cast<size_t>(cells), 0);
+      const size_t per_term = static_cast<size_t>(levels) * 4;
+      level_masks.assign(active.size() * per_term, 0);
       table.assign(static_cast<size_t>(cells) * 4, 0);
       for (size_t a = 0; a < active.size(); ++a) {
         const Term& t = *active[a];
@@ -237,7 +243,9 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
               met = l;
             }
             const int32_t sub = sx * side + sy;
-            finest[a * static_cast<size_t>(cells) + static_cast<size_t>(sub)] = static_cast<uint8_t>(met);
+            for (int l = 1; l <= met; ++l)
+              level_masks[a * per_term + static_cast<size_t>(l - 1) * 4 + static_cast<size_t>(sub >> 6)] |=
+                  uint64_t{1} << (sub & 63);
             table[static_cast<size_t>(sub) * 4 + static_cast<size_t>(t.o)] += gain[met];
           }
         }
@@ -245,13 +253,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
       const std::vector<Posting>& list = it->second;
       ++stats->lists_read;
       stats->postings_read += list.size();
-      auto sub_of = [&](const Posting& p) {
-        return (FloorDiv(p.x, cw_fine) - cx * side) * side + (FloorDiv(p.y, cw_fine) - cy * side);
-      };
+      auto sub_of = [](const Posting& p) { return p.sub(); };
       for (size_t r = 0; r < list.size();) {
-        const uint32_t slot = list[r].slot;
+        const uint32_t slot = list[r].slot();
         size_t re = r + 1;
-        while (re < list.size() && list[re].slot == slot) ++re;  // a map's postings are adjacent
+        while (re < list.size() && list[re].slot() == slot) ++re;  // a map's postings are adjacent
         uint32_t* c = counts + 4 * static_cast<size_t>(slot);
         if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(slot);
         if (re == r + 1) {
@@ -262,10 +268,14 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
           c[3] += g[3];
         } else {
           // Several features of one map: each term counts once, at its finest level.
+          uint64_t present[4] = {0, 0, 0, 0};
+          for (size_t k = r; k < re; ++k) present[sub_of(list[k]) >> 6] |= uint64_t{1} << (sub_of(list[k]) & 63);
           for (size_t a = 0; a < active.size(); ++a) {
             int met = 0;
-            for (size_t k = r; k < re; ++k)
-              met = std::max<int>(met, finest[a * static_cast<size_t>(cells) + static_cast<size_t>(sub_of(list[k]))]);
+            for (int l = levels; l >= 1 && met == 0; --l) {
+              const uint64_t* m = &level_masks[a * per_term + static_cast<size_t>(l - 1) * 4];
+              if ((m[0] & present[0]) | (m[1] & present[1]) | (m[2] & present[2]) | (m[3] & present[3])) met = l;
+            }
             c[active[a]->o] += gain[met];
           }
         }
@@ -338,7 +348,7 @@ std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k, Ret
       ++stats->lists_read;
       stats->postings_read += list.size();
       for (const Posting& p : list) {
-        if (word_count[p.slot]++ == 0) sc.word_touched.push_back(p.slot);
+        if (word_count[p.slot()]++ == 0) sc.word_touched.push_back(p.slot());
       }
     }
     for (uint32_t slot : sc.word_touched) {

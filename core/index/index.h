@@ -1,7 +1,9 @@
 // Inverted file over local map descriptors (DESIGN.md §1 "Index.Retrieve").
 //
 // Posting key = (appearance word, level-0 pyramid cell of the feature's pose
-// word in the db map's planned frame); a posting = (map slot, x, y).
+// word in the db map's planned frame); a posting = 4 bytes: the map's slot
+// (24 bits) and the finest pyramid cell (level L) inside the key's cell
+// (8 bits). Exact poses live once per map, for exact scoring.
 // Why: the kernel (pyramid_kernel.h) only counts a query feature against db
 // features of the same word in the same level-0 cell as the shifted query
 // feature, and the shift is at most max_offset per axis, so for orientation o
@@ -58,7 +60,8 @@ class Index {
   static Result<Index> Create(const IndexOptions& options = {});
 
   // Indexes `lmd` under `id`. AlreadyExists if `id` is stored; InvalidArgument
-  // if a feature cannot be a pose word (ToPoseFeatures). Nothing changes on error.
+  // if a feature cannot be a pose word (ToPoseFeatures); ResourceExhausted
+  // beyond 2^24 - 1 maps. Nothing changes on error.
   Status Add(uint64_t id, const Lmd& lmd);
   // Same from pose features already sorted by (word, x, y) (e.g. decoded
   // posting records).
@@ -96,10 +99,11 @@ class Index {
   std::vector<MapHit> RetrieveLmd(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
   std::vector<MapHit> RetrieveBow(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
 
+  static constexpr uint32_t kMaxMaps = (1u << 24) - 1;  // slots fit 24 bits
   struct Posting {
-    uint32_t slot;
-    int16_t x;
-    int16_t y;
+    uint32_t packed;  // slot << 8 | finest cell index (sx * 2^L + sy)
+    uint32_t slot() const { return packed >> 8; }
+    uint32_t sub() const { return packed & 0xFF; }
   };
 
   IndexOptions options_;
