@@ -2,12 +2,33 @@
 #include <cstdio>
 #include <string>
 
+#include "bench/eval/commands.h"
+
+namespace {
+
+void Usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: lmd-eval <command> [options]\n"
+               "commands:\n"
+               "  viewpoints [--log FILE...] [--out DIR]\n"
+               "      distance (global frame) between the CoG / CoR viewpoints planned in the two maps of\n"
+               "      every relevant pair; writes DIR/viewpoints.json (default DIR: out). Without --log:\n"
+               "      every *.log.gz of $LMD_DATA_DIR or ../shared/data next to the repository.\n"
+               "  render (--log FILE | --demo) [--map INDEX] --out FILE.svg\n"
+               "      picture of one local map: grid, walls, rooms, trajectory, CoG and CoR, features.\n");
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
-  if (command == "-h" || command == "--help") {
-    std::printf("usage: lmd-eval <command> [options]\n");
+  if (command == "-h" || command == "--help" || command == "help") {
+    Usage(stdout);
     return 0;
   }
-  std::fprintf(stderr, "lmd-eval: no evaluation command is implemented yet\n");
+  if (command == "viewpoints") return lmd::eval::RunViewpoints(argc - 2, argv + 2);
+  if (command == "render") return lmd::eval::RunRender(argc - 2, argv + 2);
+  std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
+  Usage(stderr);
   return 2;
 }

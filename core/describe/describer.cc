@@ -85,8 +85,11 @@ class PointBuckets {
   std::vector<float> x_, y_;
 };
 
-// shells x 12 histogram (30 deg sectors centred on the frame axes' multiples
-// of 30 deg) of the points within radius of (cx, cy), the point itself excluded.
+// shells x 12 histogram (30 deg sectors centred on multiples of 30 deg from
+// the frame heading) of the points within radius of (cx, cy), the point
+// itself excluded. Soft binning: each point is split linearly between the two
+// nearest shell centres and the two nearest sector centres, so that small
+// noise moves the histogram a little instead of flipping whole counts.
 void FineHistogram(const PointBuckets& pts, double cx, double cy, double radius, int shells, double self_m,
                    std::vector<double>& hist) {
   hist.assign(static_cast<size_t>(shells) * kFineSectors, 0.0);
@@ -95,11 +98,24 @@ void FineHistogram(const PointBuckets& pts, double cx, double cy, double radius,
   const double sector_scale = kFineSectors / (2 * M_PI);
   pts.ForNeighbours(cx, cy, radius, [&](float dx, float dy, float d2) {
     if (d2 < self2) return;
-    const int shell = std::min(shells - 1, static_cast<int>(std::sqrt(static_cast<double>(d2)) * shell_scale));
-    double a = std::atan2(static_cast<double>(dy), static_cast<double>(dx)) + M_PI / kFineSectors;
+    const double u = std::sqrt(static_cast<double>(d2)) * shell_scale - 0.5;  // shell centres at integers
+    int s0 = static_cast<int>(std::floor(u));
+    double ws = u - s0;
+    if (s0 < 0) s0 = 0, ws = 0;
+    if (s0 >= shells - 1) s0 = shells - 1, ws = 0;
+    double a = std::atan2(static_cast<double>(dy), static_cast<double>(dx));
     if (a < 0) a += 2 * M_PI;
-    const int sector = static_cast<int>(a * sector_scale) % kFineSectors;
-    hist[static_cast<size_t>(shell) * kFineSectors + sector] += 1.0;
+    const double v = a * sector_scale;  // sector centres at integers
+    const int a0 = static_cast<int>(std::floor(v)) % kFineSectors, a1 = (a0 + 1) % kFineSectors;
+    const double wa = v - std::floor(v);
+    double* row0 = hist.data() + static_cast<size_t>(s0) * kFineSectors;
+    row0[a0] += (1 - ws) * (1 - wa);
+    row0[a1] += (1 - ws) * wa;
+    if (ws > 0) {
+      double* row1 = row0 + kFineSectors;
+      row1[a0] += ws * (1 - wa);
+      row1[a1] += ws * wa;
+    }
   });
 }
 
@@ -149,17 +165,20 @@ std::vector<double> ProjectionMatrix(uint64_t seed, int bits, int dims) {
   return m;
 }
 
+// sign(W h): h is NOT centred, so that the common near-flat profiles (a
+// straight wall through the interest point) land at a definite place in the
+// projection rather than on every bit's boundary (centring made words of
+// walls flip under millimetre noise). Scale-free, so h needs no normalising.
 uint32_t AppearanceWord(const std::vector<double>& hist, const std::vector<double>& projection, int bits) {
   double total = 0;
   for (double v : hist) total += v;
   if (total <= 0) return 0;
   const size_t d = hist.size();
-  const double mean = 1.0 / static_cast<double>(d);
   uint32_t word = 0;
   for (int b = 0; b < bits; ++b) {
     const double* row = projection.data() + static_cast<size_t>(b) * d;
     double dot = 0;
-    for (size_t i = 0; i < d; ++i) dot += row[i] * (hist[i] / total - mean);
+    for (size_t i = 0; i < d; ++i) dot += row[i] * hist[i];
     if (dot > 0) word |= 1u << b;
   }
   return word;

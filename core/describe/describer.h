@@ -14,7 +14,8 @@
 //
 // Histogram: points rasterised at 0.01 m (duplicates in a cell count once),
 // those within radius R of the interest point counted in `shells` equal-width
-// rings x A sectors. Sectors are measured from the planned heading turned by
+// rings x A sectors, soft-binned (each point split linearly between the two
+// nearest shells and sectors). Sectors are measured from the planned heading turned by
 // k * 90 deg, k in 0..3 chosen per feature as the axis direction holding the
 // most points (ties broken toward the next counter-clockwise axis). Because
 // the planned heading is only defined modulo 90 deg, this canonical k makes
@@ -26,8 +27,9 @@
 //
 // Appearance word: sign(W h) with W a B x D Gaussian matrix from
 // projection_seed (std::mt19937_64 + Box-Muller, versioned by
-// kProjectionVersion) and h the histogram L1-normalised then centred
-// (minus 1/D). Change word: the (R, A) = (6, 6) histogram (10 x 6 = 60 bins),
+// kProjectionVersion) and h the soft-binned histogram, not centred (centring
+// put the flat profile of a straight wall on every bit boundary, so wall
+// words flipped under millimetre noise). Change word: the (R, A) = (6, 6) histogram (10 x 6 = 60 bins),
 // bit i = bin i > mean of the 60 bins.
 #pragma once
 
@@ -41,7 +43,7 @@ namespace lmd {
 
 // Bumped whenever the projection matrix generation changes (words of
 // different versions are not comparable).
-inline constexpr uint32_t kProjectionVersion = 1;
+inline constexpr uint32_t kProjectionVersion = 2;
 
 struct DescriptorSetting {
   double radius_m = 1.0;  // R, m

@@ -32,7 +32,7 @@ struct ViewpointOptions {
   WallOptions walls;
   // CoR: one seed every room_seed_stride cells along each grid axis (free
   // cells only); each grows the largest free axis-aligned rectangle it can.
-  int room_seed_stride = 3;
+  int room_seed_stride = 2;
   double room_min_area_m2 = 0.5;      // m^2; smaller rectangles are dropped
   double room_peak_fraction = 0.9;    // keep cells with f_x, f_y > this * peak (paper: 0.9)
 };

@@ -1,0 +1,12 @@
+// lmd-eval commands. Each takes argv after the command name and returns the
+// process exit code (0 ok, 1 failure, 2 usage error).
+#pragma once
+
+namespace lmd::eval {
+
+// lmd-eval viewpoints [--log FILE...] [--out DIR] [--crop M]
+int RunViewpoints(int argc, char** argv);
+// lmd-eval render (--log FILE --map INDEX | --demo [--map INDEX]) --out FILE.svg
+int RunRender(int argc, char** argv);
+
+}  // namespace lmd::eval

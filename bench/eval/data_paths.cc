@@ -1,0 +1,49 @@
+#include "bench/eval/data_paths.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+
+namespace lmd::eval {
+namespace fs = std::filesystem;
+
+std::string DefaultDataDir() {
+  std::vector<fs::path> candidates;
+  if (const char* env = std::getenv("LMD_DATA_DIR"); env != nullptr && *env) candidates.emplace_back(env);
+  // This file is bench/eval/data_paths.cc: the repository root is three levels up.
+  const fs::path source = fs::path(__FILE__);
+  if (source.is_absolute()) {
+    candidates.push_back(source.parent_path().parent_path().parent_path() / ".." / "shared" / "data");
+  }
+  candidates.emplace_back(fs::path("..") / "shared" / "data");
+  candidates.emplace_back(fs::path("..") / ".." / "shared" / "data");
+  for (const fs::path& c : candidates) {
+    std::error_code ec;
+    if (fs::is_directory(c, ec)) return fs::weakly_canonical(c, ec).string();
+  }
+  return "";
+}
+
+std::vector<std::string> LogsIn(const std::string& dir) {
+  std::vector<std::string> logs;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > 7 && name.compare(name.size() - 7, 7, ".log.gz") == 0) logs.push_back(entry.path().string());
+  }
+  std::sort(logs.begin(), logs.end());
+  return logs;
+}
+
+std::string DatasetName(const std::string& path) {
+  std::string name = fs::path(path).filename().string();
+  for (const char* ext : {".gz", ".log"}) {
+    const std::string e = ext;
+    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0) {
+      name.resize(name.size() - e.size());
+    }
+  }
+  return name;
+}
+
+}  // namespace lmd::eval

@@ -1,0 +1,21 @@
+// Where lmd-eval finds the real laser logs when none are named.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace lmd::eval {
+
+// The shared data folder: $LMD_DATA_DIR if set; else ../shared/data relative
+// to the repository root this binary was built from (known at compile time);
+// else ../shared/data, ../../shared/data relative to the working directory.
+// Empty if none exists.
+std::string DefaultDataDir();
+
+// Every *.log.gz in `dir`, sorted by name.
+std::vector<std::string> LogsIn(const std::string& dir);
+
+// "aces" for ".../aces.log.gz" (directory and .gz/.log extensions stripped).
+std::string DatasetName(const std::string& path);
+
+}  // namespace lmd::eval

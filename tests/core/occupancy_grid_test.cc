@@ -1,0 +1,92 @@
+#include "core/grid/occupancy_grid.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+namespace lmd {
+namespace {
+
+// One scan at the origin facing +x: beam 0 hits a point 3 m ahead, beam 1
+// (pointing +y) has no return.
+LocalMap OneBeamMap() {
+  LocalMap map;
+  map.trajectory = {{0, 0, 0}};
+  Scan s;
+  s.pose = {0.05, 0.05, 0};
+  s.first_angle = 0;
+  s.angle_step = static_cast<float>(M_PI / 2);
+  s.max_range = 10;
+  s.ranges = {3.0f, 10.0f};
+  map.scans.push_back(s);
+  map.points = {{3.05, 0.05}, {0.05, -2.0}, {1.0, 6.0}};
+  return map;
+}
+
+TEST(OccupancyGridTest, RayCastingMarksFreeOccupiedAndUnknown) {
+  const LocalMap map = OneBeamMap();
+  GridOptions options;
+  options.crop_m = 0;  // cover everything
+  options.no_return_clear_m = 4.0;
+  const OccupancyGrid grid = BuildOccupancyGrid(map, 0.0, options);
+  auto state = [&](double x, double y) {
+    int ix, iy;
+    grid.CellOf({x, y}, &ix, &iy);
+    return grid.at(ix, iy);
+  };
+  EXPECT_EQ(state(0.05, 0.05), CellState::kFree);
+  EXPECT_EQ(state(1.55, 0.05), CellState::kFree);
+  EXPECT_EQ(state(2.95, 0.05), CellState::kFree);
+  EXPECT_EQ(state(3.05, 0.05), CellState::kOccupied);   // the return
+  EXPECT_EQ(state(0.05, -2.0), CellState::kOccupied);   // a point no beam reached
+  EXPECT_EQ(state(1.55, 1.55), CellState::kUnknown);    // between the beams
+  EXPECT_EQ(state(0.05, 3.5), CellState::kFree);        // no-return beam clears...
+  EXPECT_EQ(state(0.05, 4.5), CellState::kUnknown);     // ...up to no_return_clear_m only
+  EXPECT_EQ(state(0.05, -1.0), CellState::kUnknown);    // behind the robot
+  EXPECT_NEAR(grid.cell_m(), 0.1, 1e-12);
+}
+
+TEST(OccupancyGridTest, MapsWithoutScansAreFreeNearTheTrajectory) {
+  LocalMap map;
+  map.trajectory = {{0, 0, 0}, {4, 0, 0}};
+  map.points = {{2, 2}};
+  GridOptions options;
+  options.trajectory_free_radius_m = 0.5;
+  const OccupancyGrid grid = BuildOccupancyGrid(map, 0.0, options);
+  auto state = [&](double x, double y) {
+    int ix, iy;
+    grid.CellOf({x, y}, &ix, &iy);
+    return grid.at(ix, iy);
+  };
+  EXPECT_EQ(state(2.0, 0.0), CellState::kFree);
+  EXPECT_EQ(state(2.0, 0.35), CellState::kFree);
+  EXPECT_EQ(state(2.0, 1.0), CellState::kUnknown);
+  EXPECT_EQ(state(2.0, 2.0), CellState::kOccupied);
+  EXPECT_GT(grid.Count(CellState::kFree), 300u);
+}
+
+TEST(OccupancyGridTest, RotatedGridAxesFollowTheRotation) {
+  LocalMap map;
+  map.trajectory = {{0, 0, 0}};
+  map.points = {{0, 2}};
+  const OccupancyGrid grid = BuildOccupancyGrid(map, M_PI / 2, {});
+  const Point2 g = grid.ToGrid({0, 2});
+  EXPECT_NEAR(g.x, 2.0, 1e-9);  // own +y is grid +x after a 90 deg turn
+  EXPECT_NEAR(g.y, 0.0, 1e-9);
+  int ix, iy;
+  grid.CellOf({0, 2}, &ix, &iy);
+  EXPECT_EQ(grid.at(ix, iy), CellState::kOccupied);
+  const Point2 back = grid.CellCentre(ix, iy);
+  EXPECT_NEAR(back.x, 0.0, 0.08);
+  EXPECT_NEAR(back.y, 2.0, 0.08);
+}
+
+TEST(OccupancyGridTest, EmptyMapGivesOneUnknownCell) {
+  const OccupancyGrid grid = BuildOccupancyGrid(LocalMap{}, 0.0, {});
+  EXPECT_EQ(grid.width(), 1);
+  EXPECT_EQ(grid.height(), 1);
+  EXPECT_EQ(grid.at(0, 0), CellState::kUnknown);
+}
+
+}  // namespace
+}  // namespace lmd
