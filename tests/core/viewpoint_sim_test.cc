@@ -1,0 +1,44 @@
+// Planned viewpoints on Helper A's simulator: two local maps of the same
+// place, built from different passes of the route, get nearby viewpoints.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "core/describe/describer.h"
+#include "core/eval/ground_truth.h"
+#include "core/localmap/pose_ops.h"
+#include "core/sim/simulate.h"
+#include "core/viewpoint/viewpoint.h"
+
+namespace lmd {
+namespace {
+
+TEST(ViewpointSimTest, RevisitsOfAPlaceGetNearbyViewpoints) {
+  SimulationOptions options = DefaultDemoOptions();
+  options.route.length_m = 150.0;
+  const std::vector<LocalMap> maps = SimulateLocalMaps(options);
+  const std::vector<RelevantPair> pairs = FindRelevantPairs(maps);
+  ASSERT_GE(pairs.size(), 20u);
+  std::vector<Point2> origin(maps.size());
+  std::vector<char> done(maps.size(), 0);
+  std::vector<double> d;
+  for (const RelevantPair& p : pairs) {
+    for (size_t i : {p.query, p.relevant}) {
+      if (done[i]) continue;
+      origin[i] = TransformPoint(maps[i].truth.global_frame, PlanViewpoint(maps[i]).origin);
+      done[i] = 1;
+    }
+    d.push_back(std::hypot(origin[p.query].x - origin[p.relevant].x, origin[p.query].y - origin[p.relevant].y));
+  }
+  std::sort(d.begin(), d.end());
+  const double within_1m = static_cast<double>(std::lower_bound(d.begin(), d.end(), 1.0) - d.begin()) / d.size();
+  std::printf("simulated: %zu pairs, median viewpoint distance %.2f m, %.0f%% within 1 m\n", d.size(), d[d.size() / 2],
+              100 * within_1m);
+  EXPECT_GE(within_1m, 0.45);  // measured 54 % (112 pairs, median 0.83 m, CoG) on this seed
+}
+
+}  // namespace
+}  // namespace lmd
