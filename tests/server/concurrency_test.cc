@@ -1,0 +1,129 @@
+// Many robots at once: concurrent inserts and queries give the results a
+// serial replay gives, and every query sees the maps its robot already stored.
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "core/sim/simulate.h"
+#include "proto/convert.h"
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+constexpr int kRobots = 6;
+constexpr int kMapsPerRobot = 12;
+
+std::vector<LocalMap> DemoMaps() {
+  std::vector<LocalMap> maps = SimulateLocalMaps(DefaultDemoOptions());
+  maps.resize(std::min<size_t>(maps.size(), kRobots * kMapsPerRobot));
+  return maps;
+}
+
+v1::RetrieveRequest QueryFor(const LocalMap& map) {
+  v1::RetrieveRequest request;
+  request.set_collection("fleet");
+  *request.mutable_map() = ToProto(map);
+  request.set_top_k(5);
+  return request;
+}
+
+TEST(ConcurrencyTest, ConcurrentRobotsMatchASerialReplay) {
+  const std::vector<LocalMap> maps = DemoMaps();
+  ASSERT_EQ(maps.size(), static_cast<size_t>(kRobots * kMapsPerRobot));
+  TempDir concurrent_dir, serial_dir;
+  TestServer concurrent(concurrent_dir.path());
+
+  std::vector<std::string> failures[kRobots];
+  std::vector<std::thread> robots;
+  for (int r = 0; r < kRobots; ++r) {
+    robots.emplace_back([&, r] {
+      for (int k = 0; k < kMapsPerRobot; ++k) {
+        const LocalMap& map = maps[r + kRobots * k];  // robots interleave along the route
+        v1::InsertMapsResponse inserted;
+        grpc::Status status = concurrent.client().InsertMaps(OneMapRequest("fleet", map.id, ToProto(map)), &inserted);
+        if (!status.ok()) {
+          failures[r].push_back("insert " + map.id + ": " + status.error_message());
+          continue;
+        }
+        v1::RetrieveResponse found;
+        status = concurrent.client().Retrieve(QueryFor(map), &found);
+        if (!status.ok() || found.hits_size() == 0 || found.hits(0).map_id() != map.id) {
+          failures[r].push_back("query " + map.id + " did not find itself first");
+        }
+      }
+    });
+  }
+  for (auto& robot : robots) robot.join();
+  for (const auto& robot_failures : failures) EXPECT_TRUE(robot_failures.empty()) << robot_failures[0];
+
+  TestServer serial(serial_dir.path());
+  for (const LocalMap& map : maps) {
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(serial.client().InsertMaps(OneMapRequest("fleet", map.id, ToProto(map)), &inserted).ok());
+  }
+  for (size_t i = 0; i < maps.size(); i += 7) {
+    v1::RetrieveResponse a, b;
+    ASSERT_TRUE(concurrent.client().Retrieve(QueryFor(maps[i]), &a).ok());
+    ASSERT_TRUE(serial.client().Retrieve(QueryFor(maps[i]), &b).ok());
+    ASSERT_EQ(a.hits_size(), b.hits_size());
+    for (int h = 0; h < a.hits_size(); ++h) {
+      EXPECT_EQ(a.hits(h).map_id(), b.hits(h).map_id()) << "query " << maps[i].id << " hit " << h;
+      EXPECT_DOUBLE_EQ(a.hits(h).score(), b.hits(h).score());
+    }
+  }
+}
+
+TEST(ConcurrencyTest, ExpiredDeadlineIsReportedAndTheServerKeepsServing) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.worker_threads = 1;
+  TestServer server(dir.path(), config);
+  client::ClientOptions options;
+  options.target = server.address();
+  options.deadline = std::chrono::milliseconds(1);  // expires while queued or running
+  options.max_attempts = 1;
+  auto hurried = std::move(client::LmdClient::Create(options)).value();
+  const std::vector<LocalMap> maps = DemoMaps();
+  v1::InsertMapsRequest big;
+  for (int i = 0; i < 40; ++i) *big.add_maps() = OneMapRequest("fleet", maps[i].id, ToProto(maps[i])).maps(0);
+  v1::InsertMapsResponse ignored;
+  const grpc::Status status = hurried->InsertMaps(big, &ignored);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+  // The server stays healthy and serves the next call.
+  EXPECT_TRUE(server.client().InsertMaps(OneMapRequest("fleet", "after", SquareRoomMap()), &ignored).ok());
+}
+
+TEST(ConcurrencyTest, FullQueueIsRefusedWithResourceExhausted) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.worker_threads = 1;
+  config.max_queued_calls = 1;
+  TestServer server(dir.path(), config);
+  const std::vector<LocalMap> maps = DemoMaps();
+  std::atomic<int> exhausted{0}, ok{0};
+  std::vector<std::thread> clients;
+  for (int c = 0; c < 8; ++c) {
+    clients.emplace_back([&, c] {
+      v1::InsertMapsRequest batch;
+      for (int i = 0; i < 16; ++i) {  // ~50 ms of describing per call: calls overlap
+        *batch.add_maps() = OneMapRequest("fleet", "c" + std::to_string(c) + "-" + std::to_string(i),
+                                          ToProto(maps[(c * 16 + i) % maps.size()])).maps(0);
+      }
+      v1::InsertMapsResponse ignored;
+      const grpc::Status status = server.client().InsertMaps(batch, &ignored);
+      if (status.ok()) ++ok;
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+        EXPECT_NE(status.error_message().find("max_queued_calls"), std::string::npos);
+        ++exhausted;
+      }
+    });
+  }
+  for (auto& client : clients) client.join();
+  EXPECT_GT(ok.load(), 0);
+  EXPECT_GT(exhausted.load(), 0) << "8 concurrent batches never overflowed a queue of 1";
+  EXPECT_EQ(ok.load() + exhausted.load(), 8);
+}
+
+}  // namespace
+}  // namespace lmd::testing
