@@ -44,28 +44,6 @@ void GroupSharedWords(const PreparedQuery& q, const PoseFeature* db, size_t nd,
   }
 }
 
-// sum over cells of min(count in a, count in b); a and b are sorted here.
-int CountIntersection(std::vector<int64_t>* a, std::vector<int64_t>* b) {
-  std::sort(a->begin(), a->end());
-  std::sort(b->begin(), b->end());
-  int total = 0;
-  size_t i = 0, j = 0;
-  while (i < a->size() && j < b->size()) {
-    if ((*a)[i] < (*b)[j]) {
-      ++i;
-    } else if ((*b)[j] < (*a)[i]) {
-      ++j;
-    } else {
-      const int64_t c = (*a)[i];
-      int na = 0, nb = 0;
-      while (i < a->size() && (*a)[i] == c) ++i, ++na;
-      while (j < b->size() && (*b)[j] == c) ++j, ++nb;
-      total += std::min(na, nb);
-    }
-  }
-  return total;
-}
-
 }  // namespace
 
 Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptions& options) {
@@ -129,16 +107,56 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
   if (s->groups.empty()) return best;
   const int32_t box = q.max_offset;
   const int levels = q.levels;
+  const size_t nl = static_cast<size_t>(levels) + 1;
+  // Db cells of the groups that are not one-to-one, sorted per level (they do
+  // not depend on the orientation or the offset).
+  s->multi.clear();
+  s->cells.clear();
+  s->offsets.clear();
+  for (uint32_t g = 0; g < s->groups.size(); ++g) {
+    const auto& gr = s->groups[g];
+    if (gr.q_end - gr.q_begin == 1 && gr.d_end - gr.d_begin == 1) continue;
+    s->multi.push_back(g);
+    for (int l = 0; l <= levels; ++l) {
+      const int32_t cw = q.cell0 >> l;
+      const size_t begin = s->cells.size();
+      s->offsets.push_back(static_cast<uint32_t>(begin));
+      for (uint32_t j = gr.d_begin; j < gr.d_end; ++j)
+        s->cells.push_back(PackPair(FloorDiv(db[j].x, cw), FloorDiv(db[j].y, cw)));
+      std::sort(s->cells.begin() + static_cast<long>(begin), s->cells.end());
+    }
+  }
+  s->offsets.push_back(static_cast<uint32_t>(s->cells.size()));
+  // run[k] = length of the run of equal cells starting at k (at run starts).
+  s->run.assign(s->cells.size(), 0);
+  for (size_t k = 0; k + 1 < s->offsets.size(); ++k) {
+    for (uint32_t a = s->offsets[k]; a < s->offsets[k + 1];) {
+      uint32_t b = a + 1;
+      while (b < s->offsets[k + 1] && s->cells[b] == s->cells[a]) ++b;
+      s->run[a] = b - a;
+      a = b;
+    }
+  }
   for (int o = 0; o < 4; ++o) {
     const int32_t* rx = q.rx[o].data();
     const int32_t* ry = q.ry[o].data();
     // 1-3: matches in the box, histogram of differences, mode bin, offset.
     s->matches.clear();
     for (const auto& g : s->groups) {
+      const bool many = g.d_end - g.d_begin > 8;
       for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
-        for (uint32_t j = g.d_begin; j < g.d_end; ++j) {
+        uint32_t j = g.d_begin;
+        if (many) {  // db features of a word are sorted by x: skip to x >= rx - box
+          j = static_cast<uint32_t>(std::lower_bound(db + g.d_begin, db + g.d_end, rx[i] - box,
+                                                     [](const PoseFeature& f, int32_t v) { return f.x < v; }) - db);
+        }
+        for (; j < g.d_end; ++j) {
           const int32_t dx = db[j].x - rx[i], dy = db[j].y - ry[i];
-          if (dx < -box || dx > box || dy < -box || dy > box) continue;
+          if (dx > box) {
+            if (many) break;
+            continue;
+          }
+          if (dx < -box || dy < -box || dy > box) continue;
           s->matches.push_back({PackPair(FloorDiv(dx, q.offset_bin), FloorDiv(dy, q.offset_bin)), dx, dy});
         }
       }
@@ -156,7 +174,7 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     int64_t sx = 0, sy = 0;
     for (size_t k = mode_begin; k < mode_begin + mode_count; ++k) sx += s->matches[k].dx, sy += s->matches[k].dy;
     const int64_t c = static_cast<int64_t>(mode_count);
-    // round(sum / c), halves away from -inf; exact integer arithmetic.
+    // round(sum / c), halves toward +inf; exact integer arithmetic.
     auto round_mean = [c](int64_t sum) {
       const int64_t num = 2 * sum + c, den = 2 * c;
       return static_cast<int32_t>(num >= 0 ? num / den : -((-num + den - 1) / den));
@@ -165,27 +183,34 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     // 4-5: pyramid intersection of the shifted query against the db map.
     int inter[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
     for (const auto& g : s->groups) {
-      if (g.q_end - g.q_begin == 1 && g.d_end - g.d_begin == 1) {
-        const int32_t qx = rx[g.q_begin] + tx, qy = ry[g.q_begin] + ty;
-        const int32_t px = db[g.d_begin].x, py = db[g.d_begin].y;
-        for (int l = 0; l <= levels; ++l) {
-          const int32_t cw = q.cell0 >> l;
-          if (FloorDiv(qx, cw) != FloorDiv(px, cw) || FloorDiv(qy, cw) != FloorDiv(py, cw)) break;
-          ++inter[l];
-        }
-        continue;
-      }
+      if (g.q_end - g.q_begin != 1 || g.d_end - g.d_begin != 1) continue;
+      const int32_t qx = rx[g.q_begin] + tx, qy = ry[g.q_begin] + ty;
+      const int32_t px = db[g.d_begin].x, py = db[g.d_begin].y;
       for (int l = 0; l <= levels; ++l) {
         const int32_t cw = q.cell0 >> l;
-        s->cells_q.clear();
-        s->cells_d.clear();
-        for (uint32_t i = g.q_begin; i < g.q_end; ++i)
-          s->cells_q.push_back(PackPair(FloorDiv(rx[i] + tx, cw), FloorDiv(ry[i] + ty, cw)));
-        for (uint32_t j = g.d_begin; j < g.d_end; ++j)
-          s->cells_d.push_back(PackPair(FloorDiv(db[j].x, cw), FloorDiv(db[j].y, cw)));
-        const int n = CountIntersection(&s->cells_q, &s->cells_d);
-        if (n == 0) break;
-        inter[l] += n;
+        if (FloorDiv(qx, cw) != FloorDiv(px, cw) || FloorDiv(qy, cw) != FloorDiv(py, cw)) break;
+        ++inter[l];
+      }
+    }
+    // Other groups: each query feature takes one unmatched db feature of its
+    // cell, so the count is sum over cells of min(query count, db count).
+    s->used.assign(s->cells.size(), 0);
+    for (size_t k = 0; k < s->multi.size(); ++k) {
+      const auto& g = s->groups[s->multi[k]];
+      for (int l = 0; l <= levels; ++l) {
+        const int32_t cw = q.cell0 >> l;
+        const int64_t* begin = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l)];
+        const int64_t* end = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l) + 1];
+        for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
+          const int64_t cell = PackPair(FloorDiv(rx[i] + tx, cw), FloorDiv(ry[i] + ty, cw));
+          const int64_t* run = std::lower_bound(begin, end, cell);
+          if (run == end || *run != cell) continue;
+          const size_t first = static_cast<size_t>(run - s->cells.data());
+          if (s->used[first] < s->run[first]) {
+            ++s->used[first];
+            ++inter[l];
+          }
+        }
       }
     }
     double raw = std::ldexp(static_cast<double>(inter[0]), -levels);

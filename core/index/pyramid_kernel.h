@@ -87,7 +87,13 @@ struct KernelScratch {
   struct Match { int64_t bin; int32_t dx, dy; };
   std::vector<Group> groups;
   std::vector<Match> matches;
-  std::vector<int64_t> cells_q, cells_d;
+  // Groups with several features on a side: their db cells per level, sorted
+  // (cells[offsets[k * (L + 1) + l] ...]), and how many of each were matched.
+  std::vector<uint32_t> multi;
+  std::vector<int64_t> cells;
+  std::vector<uint32_t> offsets;
+  std::vector<uint32_t> run;   // length of the run of equal cells starting here
+  std::vector<uint32_t> used;  // db features of that run already matched
 };
 
 // kLmd score of one stored map (pose features sorted by (word, x, y)).
