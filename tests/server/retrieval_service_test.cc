@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/viewpoint/viewpoint.h"
 #include "tests/server/test_server.h"
 
 namespace lmd::testing {
@@ -118,9 +119,10 @@ TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
   unknown.set_collection("nowhere");
   EXPECT_EQ(server_->client().Retrieve(unknown, &response).error_code(), grpc::StatusCode::NOT_FOUND);
 
-  v1::RetrieveRequest cog = Query(CornerMap(0, 0));
-  cog.set_method(v1::METHOD_LMD_COG);
-  status = server_->client().Retrieve(cog, &response);
+  // lmdd indexes the default planner's viewpoints only; the other is refused.
+  v1::RetrieveRequest other = Query(CornerMap(0, 0));
+  other.set_method(ViewpointOptions().planner == Planner::kCoG ? v1::METHOD_LMD_COR : v1::METHOD_LMD_COG);
+  status = server_->client().Retrieve(other, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
 }
