@@ -8,6 +8,8 @@
 namespace lmd {
 namespace {
 
+static_assert((-3 >> 1) == -2, "cells use arithmetic right shifts as floor division by 2^k");
+
 bool PoseFeatureLess(const PoseFeature& a, const PoseFeature& b) {
   if (a.word != b.word) return a.word < b.word;
   if (a.x != b.x) return a.x < b.x;
@@ -108,6 +110,8 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
   const int32_t box = q.max_offset;
   const int levels = q.levels;
   const size_t nl = static_cast<size_t>(levels) + 1;
+  // Level-l cell = finest cell >> (L - l): cells nest, one division per axis.
+  const int32_t fine = q.cell0 >> levels;
   // Db cells of the groups that are not one-to-one, sorted per level (they do
   // not depend on the orientation or the offset).
   s->multi.clear();
@@ -118,11 +122,10 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     if (gr.q_end - gr.q_begin == 1 && gr.d_end - gr.d_begin == 1) continue;
     s->multi.push_back(g);
     for (int l = 0; l <= levels; ++l) {
-      const int32_t cw = q.cell0 >> l;
       const size_t begin = s->cells.size();
       s->offsets.push_back(static_cast<uint32_t>(begin));
       for (uint32_t j = gr.d_begin; j < gr.d_end; ++j)
-        s->cells.push_back(PackPair(FloorDiv(db[j].x, cw), FloorDiv(db[j].y, cw)));
+        s->cells.push_back(PackPair(FloorDiv(db[j].x, fine) >> (levels - l), FloorDiv(db[j].y, fine) >> (levels - l)));
       std::sort(s->cells.begin() + static_cast<long>(begin), s->cells.end());
     }
   }
@@ -184,11 +187,11 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     int inter[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
     for (const auto& g : s->groups) {
       if (g.q_end - g.q_begin != 1 || g.d_end - g.d_begin != 1) continue;
-      const int32_t qx = rx[g.q_begin] + tx, qy = ry[g.q_begin] + ty;
-      const int32_t px = db[g.d_begin].x, py = db[g.d_begin].y;
+      const int32_t qx = FloorDiv(rx[g.q_begin] + tx, fine), qy = FloorDiv(ry[g.q_begin] + ty, fine);
+      const int32_t px = FloorDiv(db[g.d_begin].x, fine), py = FloorDiv(db[g.d_begin].y, fine);
       for (int l = 0; l <= levels; ++l) {
-        const int32_t cw = q.cell0 >> l;
-        if (FloorDiv(qx, cw) != FloorDiv(px, cw) || FloorDiv(qy, cw) != FloorDiv(py, cw)) break;
+        const int shift = levels - l;
+        if ((qx >> shift) != (px >> shift) || (qy >> shift) != (py >> shift)) break;
         ++inter[l];
       }
     }
@@ -197,12 +200,12 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     s->used.assign(s->cells.size(), 0);
     for (size_t k = 0; k < s->multi.size(); ++k) {
       const auto& g = s->groups[s->multi[k]];
-      for (int l = 0; l <= levels; ++l) {
-        const int32_t cw = q.cell0 >> l;
-        const int64_t* begin = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l)];
-        const int64_t* end = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l) + 1];
-        for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
-          const int64_t cell = PackPair(FloorDiv(rx[i] + tx, cw), FloorDiv(ry[i] + ty, cw));
+      for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
+        const int32_t fx = FloorDiv(rx[i] + tx, fine), fy = FloorDiv(ry[i] + ty, fine);
+        for (int l = 0; l <= levels; ++l) {
+          const int64_t* begin = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l)];
+          const int64_t* end = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l) + 1];
+          const int64_t cell = PackPair(fx >> (levels - l), fy >> (levels - l));
           const int64_t* run = std::lower_bound(begin, end, cell);
           if (run == end || *run != cell) continue;
           const size_t first = static_cast<size_t>(run - s->cells.data());
