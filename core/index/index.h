@@ -9,8 +9,12 @@
 // feature, and the shift is at most max_offset per axis, so for orientation o
 // a query feature can only gain from the lists keyed (its word, a level-0
 // cell meeting the box R(o) q +- max_offset). With B = 10 bits there are only
-// 1024 words, so word-only lists would hold ~every map; the pose cell makes a
-// query read a few percent of all postings.
+// 1024 words, so word-only lists would hold ~every map; the pose cell lets a
+// query skip the lists of cells its features cannot reach. How much that and
+// the bound below save depends on the data: features spread over many cells
+// and evenly used words prune well; features packed near the planned origin
+// and a few words on most features (a "wall" word) make every map a close
+// candidate. `lmd-bench index` reports both (postings read, maps scored).
 //
 // Retrieval is exact. Pass 1 reads, once per distinct query word, the lists
 // of the level-0 cells that meet any of that word's boxes (4 orientations x

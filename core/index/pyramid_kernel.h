@@ -9,8 +9,9 @@
 //  2. Matches = pairs (query feature, db feature) with the same appearance
 //     word and d = db - q' inside the box [-max_offset, max_offset]^2.
 //     No match: this orientation scores 0.
-//  3. Offset t = rounded mean of d over the matches in the mode bin of the
-//     histogram of d (bins of offset_bin_m; ties: smallest (bin x, bin y)).
+//  3. Offset t = mean of d over the matches in the mode bin of the histogram
+//     of d (bins of offset_bin_m; ties: smallest (bin x, bin y)), rounded to
+//     the nearest pose unit (halves up); |t| <= max_offset per axis.
 //  4. Shift the query: q'' = q' + t. Level l cell of a pose p:
 //     floor(p / (W 2^-l)), cells are anchored at the planned origin, so levels
 //     nest. I^l = sum over (word, cell) of min(query count, db count).
@@ -20,10 +21,10 @@
 // Level 0 is one W x W cell (5 m), not the whole map: the paper's cell width
 // W 2^-l at l = 0; plain word counts are the separate kBow baseline.
 //
-// Bound used by the inverted file: I^2 <= I^1 <= I^0 (nested cells), so
-// raw K <= I^0 <= min(|q|, |d|), and I^0 <= the number of query features
-// whose word occurs in the db map in a level-0 cell that meets the box around
-// the rotated feature (the shifted feature lies in that box).
+// Bounds used by the inverted file (index.h): cells nest, so I^2 <= I^1 <=
+// I^0 <= min(|q|, |d|), and a query feature counts in I^l only if a db
+// feature of its word lies in a level-l cell meeting its box (the shifted
+// feature stays in the box).
 #pragma once
 
 #include <cstdint>
