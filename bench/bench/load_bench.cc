@@ -1,0 +1,199 @@
+#include "bench/bench/load_bench.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "client/lmd_client.h"
+#include "core/sim/simulate.h"
+#include "core/util/progress_bar.h"
+#include "proto/convert.h"
+
+namespace lmd::bench {
+namespace {
+
+struct LoadOptions {
+  std::string server = "127.0.0.1:50051";
+  std::string collection = "load";
+  std::string token;
+  int robots = 10;
+  double hz = 1.0;
+  double seconds = 10.0;
+  bool json = false;
+  bool seed = true;
+};
+
+bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
+  for (int i = 0; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--json") { options->json = true; continue; }
+    if (flag == "--no-seed") { options->seed = false; continue; }
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "lmd-bench load: %s needs a value\n", flag.c_str());
+      return false;
+    }
+    const std::string value = argv[++i];
+    char* end = nullptr;
+    if (flag == "--server") options->server = value;
+    else if (flag == "--collection") options->collection = value;
+    else if (flag == "--token") options->token = value;
+    else if (flag == "--robots") options->robots = static_cast<int>(std::strtol(value.c_str(), &end, 10));
+    else if (flag == "--hz") options->hz = std::strtod(value.c_str(), &end);
+    else if (flag == "--seconds") options->seconds = std::strtod(value.c_str(), &end);
+    else {
+      std::fprintf(stderr, "lmd-bench load: unknown flag %s\n", flag.c_str());
+      return false;
+    }
+    if (end != nullptr && *end != '\0') {
+      std::fprintf(stderr, "lmd-bench load: %s expects a number, got '%s'\n", flag.c_str(), value.c_str());
+      return false;
+    }
+  }
+  if (options->robots < 1 || options->robots > 5000 || !(options->hz > 0) || options->hz > 100 ||
+      !(options->seconds > 0) || options->seconds > 3600) {
+    std::fprintf(stderr, "lmd-bench load: need 1 <= robots <= 5000, 0 < hz <= 100, 0 < seconds <= 3600\n");
+    return false;
+  }
+  return true;
+}
+
+v1::InsertMapRequest ToInsert(const std::string& collection, const std::string& robot, uint64_t sequence,
+                              const LocalMap& map) {
+  v1::InsertMapRequest insert;
+  insert.mutable_metadata()->set_collection(collection);
+  insert.mutable_metadata()->set_map_id(robot + "-" + std::to_string(sequence));
+  insert.mutable_metadata()->set_robot_id(robot);
+  insert.mutable_metadata()->set_sequence(sequence);
+  *insert.mutable_map() = ToProto(map);
+  return insert;
+}
+
+double Percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+int RunLoadBench(int argc, char** argv) {
+  LoadOptions options;
+  if (!ParseLoadOptions(argc, argv, &options)) return 2;
+  client::ClientOptions client_options;
+  client_options.target = options.server;
+  client_options.token = options.token;
+  client_options.deadline = std::chrono::seconds(10);
+  client_options.max_attempts = 1;  // a retry would hide the error being measured
+  auto client = client::LmdClient::Create(client_options);
+  if (!client.ok()) {
+    std::fprintf(stderr, "lmd-bench load: %s\n", client.status().message().c_str());
+    return 1;
+  }
+
+  if (options.seed) {  // the stored world the robots localise against
+    const std::vector<LocalMap> base = SimulateLocalMaps(DefaultDemoOptions());
+    ProgressBar progress("load: seeding " + options.collection, base.size());
+    for (size_t i = 0; i < base.size(); i += 25) {
+      v1::InsertMapsRequest request;
+      for (size_t k = i; k < std::min(base.size(), i + 25); ++k) {
+        *request.add_maps() = ToInsert(options.collection, "seed", k, base[k]);
+      }
+      v1::InsertMapsResponse response;
+      const grpc::Status status = (*client)->InsertMaps(request, &response);
+      if (!status.ok()) {
+        std::fprintf(stderr, "lmd-bench load: seeding failed: %s\n", status.error_message().c_str());
+        return 1;
+      }
+      progress.Add(static_cast<size_t>(request.maps_size()));
+    }
+  }
+
+  // Each robot's maps: its own route through the demo world, long enough for
+  // one map per tick (repeated if the route is short).
+  const size_t ticks = static_cast<size_t>(std::ceil(options.hz * options.seconds));
+  std::vector<std::vector<v1::InsertMapRequest>> plans(options.robots);
+  {
+    ProgressBar progress("load: simulating robots", options.robots);
+    for (int r = 0; r < options.robots; ++r) {
+      SimulationOptions sim = DefaultDemoOptions();
+      sim.route.seed = 1000 + r;
+      sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
+      const std::vector<LocalMap> maps = SimulateLocalMaps(sim);
+      const std::string robot = "robot" + std::to_string(r);
+      for (size_t t = 0; t < ticks && !maps.empty(); ++t) {
+        plans[r].push_back(ToInsert(options.collection, robot, t, maps[t % maps.size()]));
+      }
+      progress.Add();
+    }
+  }
+
+  std::mutex mutex;
+  std::vector<double> latencies_ms;  // guarded by mutex
+  std::atomic<long> errors{0};
+  std::atomic<long> calls{0};
+  std::string first_error;           // guarded by mutex
+  const auto start = std::chrono::steady_clock::now();
+  const auto period = std::chrono::duration<double>(1.0 / options.hz);
+  std::vector<std::thread> robots;
+  for (int r = 0; r < options.robots; ++r) {
+    robots.emplace_back([&, r] {
+      // Robots start spread over one period, as real robots would.
+      const auto offset = period * (static_cast<double>(r) / options.robots);
+      for (size_t t = 0; t < plans[r].size(); ++t) {
+        std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                  offset + period * static_cast<double>(t)));
+        const v1::InsertMapRequest& map = plans[r][t];
+        auto timed = [&](auto&& call) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const grpc::Status status = call();
+          const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          ++calls;
+          std::lock_guard<std::mutex> lock(mutex);
+          latencies_ms.push_back(ms);
+          if (!status.ok()) {
+            if (errors++ == 0) first_error = status.error_message();
+          }
+        };
+        timed([&] {
+          v1::InsertMapsRequest request;
+          *request.add_maps() = map;
+          v1::InsertMapsResponse response;
+          return (*client)->InsertMaps(request, &response);
+        });
+        timed([&] {
+          v1::DetectChangesRequest request;
+          request.set_collection(options.collection);
+          *request.mutable_map() = map.map();
+          request.set_top_k(5);
+          v1::DetectChangesResponse response;
+          return (*client)->DetectChanges(request, &response);
+        });
+      }
+    });
+  }
+  for (auto& robot : robots) robot.join();
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const double rps = static_cast<double>(calls.load()) / elapsed;
+  const double p50 = Percentile(latencies_ms, 0.50), p95 = Percentile(latencies_ms, 0.95);
+  const double p99 = Percentile(latencies_ms, 0.99);
+  std::printf("robots=%d hz=%.2f seconds=%.1f calls=%ld (insert + detect per tick) rps=%.1f\n", options.robots,
+              options.hz, elapsed, calls.load(), rps);
+  std::printf("latency p50=%.2f ms p95=%.2f ms p99=%.2f ms errors=%ld%s%s\n", p50, p95, p99, errors.load(),
+              first_error.empty() ? "" : " first error: ", first_error.c_str());
+  if (options.json) {
+    std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld}\n",
+                options.robots, rps, p50, p95, p99, errors.load());
+  }
+  return errors.load() == 0 ? 0 : 1;
+}
+
+}  // namespace lmd::bench
