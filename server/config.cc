@@ -80,6 +80,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "metrics_listen") { config->metrics_listen = value; return Status::Ok(); }
   if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
+  if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
   return Status::InvalidArgument("unknown setting '" + key + "'");

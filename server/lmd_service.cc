@@ -30,7 +30,19 @@ std::string BatchCollection(const v1::InsertMapsRequest& request) {
 
 LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner,
                                const CallMetrics* metrics)
-    : config_(config), store_(store), runner_(runner), metrics_(metrics) {}
+    : config_(config),
+      store_(store),
+      runner_(runner),
+      metrics_(metrics),
+      cache_(config.descriptor_cache_entries) {}
+
+Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
+  const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
+  if (std::optional<Lmd> cached = cache_.Find(key)) return std::move(*cached);
+  Lmd lmd = DescribeForIndex(FromProto(map), store_->indexing());
+  cache_.Put(key, lmd);
+  return lmd;
+}
 
 double LmdServiceImpl::uptime_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
@@ -48,7 +60,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     MapWrite write;
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
-    write.lmd = DescribeForIndex(FromProto(request->map()), store_->indexing());
+    write.lmd = Describe(request->map());
     maps.push_back(std::move(write));
   }
   Status stored = store_->InsertMaps(&maps, config_.max_collections);

@@ -10,6 +10,7 @@
 #include "lmd/v1/lmd.grpc.pb.h"
 #include "server/call_runner.h"
 #include "server/config.h"
+#include "server/descriptor_cache.h"
 #include "core/change/change_detector.h"
 #include "server/map_store.h"
 
@@ -50,6 +51,10 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const ServerConfig& config() const { return config_; }
 
  private:
+  // The descriptor of `map` as the store describes maps, from the cache when
+  // the same map was described recently.
+  Lmd Describe(const v1::LocalMap& map) const;
+
   // A query: validated, described, and retrieved against its collection.
   struct Query {
     Lmd lmd;
@@ -70,6 +75,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   CallRunner* const runner_;
   const CallMetrics* const metrics_;
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  mutable DescriptorCache cache_;
 };
 
 }  // namespace lmd::server

@@ -47,7 +47,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
 
   Query query;
-  query.lmd = DescribeForIndex(FromProto(map), store_->indexing());
+  query.lmd = Describe(map);
   RetrieveOptions options;
   options.top_k = top_k == 0 ? kDefaultTopK : top_k;
   options.method = *core_method;

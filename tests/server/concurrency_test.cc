@@ -74,7 +74,9 @@ TEST(ConcurrencyTest, ConcurrentRobotsMatchASerialReplay) {
       // score of their own above the last one must be the same map.
       int ties = 0;
       for (int o = 0; o < a.hits_size(); ++o) ties += a.hits(o).score() == a.hits(h).score();
-      if (ties == 1 && a.hits(h).score() > a.hits(a.hits_size() - 1).score()) EXPECT_EQ(a.hits(h).map_id(), b.hits(h).map_id()) << "query " << maps[i].id << " hit " << h;
+      if (ties == 1 && a.hits(h).score() > a.hits(a.hits_size() - 1).score()) {
+        EXPECT_EQ(a.hits(h).map_id(), b.hits(h).map_id()) << "query " << maps[i].id << " hit " << h;
+      }
     }
   }
 }

@@ -1,0 +1,46 @@
+// DescriptorCache: the descriptors of recently seen local maps, by content.
+// A robot typically sends the same map twice in a row (DetectChanges, then
+// InsertMaps, or the reverse); describing costs milliseconds (viewpoint
+// planning and histograms), looking it up here microseconds. Keyed by two
+// independent 64-bit hashes of the map's wire bytes plus their length, so a
+// wrong hit needs a 128-bit collision. Thread-safe; least recently used
+// entries are dropped beyond `capacity`.
+#pragma once
+
+#include <cstdint>
+#include <list>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <unordered_map>
+
+#include "core/types.h"
+
+namespace lmd::server {
+
+class DescriptorCache {
+ public:
+  explicit DescriptorCache(size_t capacity) : capacity_(capacity) {}
+
+  struct Key {
+    uint64_t a = 0, b = 0, size = 0;
+    bool operator==(const Key& o) const { return a == o.a && b == o.b && size == o.size; }
+  };
+  static Key KeyOf(const std::string& map_bytes);
+
+  std::optional<Lmd> Find(const Key& key);
+  void Put(const Key& key, const Lmd& lmd);
+
+ private:
+  struct KeyHash {
+    size_t operator()(const Key& k) const { return static_cast<size_t>(k.a ^ (k.b * 0x9e3779b97f4a7c15ULL)); }
+  };
+  using Entry = std::pair<Key, Lmd>;
+
+  const size_t capacity_;
+  std::mutex mutex_;
+  std::list<Entry> entries_;  // most recent first; guarded by mutex_
+  std::unordered_map<Key, std::list<Entry>::iterator, KeyHash> index_;  // guarded by mutex_
+};
+
+}  // namespace lmd::server
