@@ -1,12 +1,16 @@
 // lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]
 //                 [--top-k K] [--max-offset M] [--method lmd|bow]
+//                 [--max-word-share F] [--cache FILE]
 // Builds an index of N simulated local maps (simulator -> planner ->
 // describer), runs Q queries through the inverted file and the exhaustive
 // scorer in the same process, and reports p50 latencies, their ratio, whether
 // every top-K agreed (ids, scores, orientations, offsets, ranks) and bytes per
 // stored map (encoded Lmd + posting records). With --json the last stdout line
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
-// "bytes_per_map": z}. Progress goes to stderr.
+// "bytes_per_map": z}. Progress goes to stderr. --cache FILE keeps the
+// described maps and queries (encoded Lmds) so that runs with other retrieval
+// options skip the simulator and the describer (reused only if N, Q and the
+// seed match).
 #include "bench/bench/index_bench.h"
 
 #include <algorithm>
@@ -15,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -37,13 +42,15 @@ struct Args {
   bool json = false;
   uint64_t seed = 1;
   int threads = 0;
+  std::string cache;
   RetrieveOptions retrieve;
 };
 
 void Usage() {
   std::fprintf(stderr,
                "usage: lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]\n"
-               "                       [--top-k K] [--max-offset M] [--method lmd|bow]\n");
+               "                       [--top-k K] [--max-offset M] [--method lmd|bow]\n"
+               "                       [--max-word-share F] [--cache FILE]\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
@@ -88,6 +95,13 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--max-offset") {
       if (!number("--max-offset", 0, 100, &x)) return false;
       args->retrieve.max_offset_m = x;
+    } else if (a == "--max-word-share") {
+      if (!number("--max-word-share", 1e-6, 1, &x)) return false;
+      args->retrieve.max_word_share = x;
+    } else if (a == "--cache") {
+      const char* v = value("--cache");
+      if (v == nullptr) return false;
+      args->cache = v;
     } else if (a == "--method") {
       const char* v = value("--method");
       if (v == nullptr) return false;
@@ -109,6 +123,61 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     }
   }
   return true;
+}
+
+// Cache file: "lmdbench1" N Q seed, then per map / query a u32 length and
+// EncodeLmd bytes, then the query sources (u64). Native byte order.
+void PutU64(std::ofstream& out, uint64_t v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); }
+bool GetU64(std::ifstream& in, uint64_t* v) { return static_cast<bool>(in.read(reinterpret_cast<char*>(v), sizeof(*v))); }
+
+bool LoadCache(const std::string& path, const Args& args, SimDescriptors* data) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  char magic[9] = {};
+  uint64_t n = 0, q = 0, seed = 0;
+  if (!in.read(magic, 9) || std::memcmp(magic, "lmdbench1", 9) != 0 || !GetU64(in, &n) || !GetU64(in, &q) ||
+      !GetU64(in, &seed) || n != args.maps || q != args.queries || seed != args.seed)
+    return false;
+  auto read_lmds = [&](uint64_t count, std::vector<Lmd>* out) {
+    for (uint64_t k = 0; k < count; ++k) {
+      uint64_t len = 0;
+      if (!GetU64(in, &len) || len > (1u << 24)) return false;
+      std::string bytes(len, '\0');
+      if (!in.read(bytes.data(), static_cast<std::streamsize>(len))) return false;
+      auto lmd = DecodeLmd(bytes);
+      if (!lmd.ok()) return false;
+      out->push_back(std::move(lmd).value());
+    }
+    return true;
+  };
+  uint64_t stored_maps = 0, stored_queries = 0;
+  if (!GetU64(in, &stored_maps) || !read_lmds(stored_maps, &data->maps) || !GetU64(in, &stored_queries) ||
+      !read_lmds(stored_queries, &data->queries))
+    return false;
+  for (uint64_t k = 0; k < stored_queries; ++k) {
+    uint64_t source = 0;
+    if (!GetU64(in, &source)) return false;
+    data->query_sources.push_back(source);
+  }
+  return true;
+}
+
+void SaveCache(const std::string& path, const Args& args, const SimDescriptors& data) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write("lmdbench1", 9);
+  PutU64(out, args.maps);
+  PutU64(out, args.queries);
+  PutU64(out, args.seed);
+  for (const std::vector<Lmd>* set : {&data.maps, &data.queries}) {
+    PutU64(out, set->size());
+    for (const Lmd& lmd : *set) {
+      const std::string bytes = EncodeLmd(lmd);
+      PutU64(out, bytes.size());
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    }
+  }
+  for (uint64_t source : data.query_sources) PutU64(out, source);
+  if (!out) std::fprintf(stderr, "lmd-bench index: could not write the cache %s\n", path.c_str());
 }
 
 double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -153,10 +222,16 @@ int RunIndexBench(int argc, char** argv) {
   sim.seed = args.seed;
   sim.threads = args.threads;
   SimDescriptors data;
-  {
+  const bool cached = !args.cache.empty() && LoadCache(args.cache, args, &data);
+  if (cached) {
+    std::fprintf(stderr, "lmd-bench index: %zu maps and %zu queries from the cache %s\n", data.maps.size(),
+                 data.queries.size(), args.cache.c_str());
+  } else {
+    data = SimDescriptors();
     ProgressBar bar("simulate + describe maps", args.maps);
     data = SimulateDescriptors(sim, [&](size_t done, size_t) { bar.Update(done); });
     bar.Done();
+    if (!args.cache.empty()) SaveCache(args.cache, args, data);
   }
   if (data.maps.size() < args.maps)
     std::fprintf(stderr, "lmd-bench index: the simulator gave %zu maps of %zu\n", data.maps.size(), args.maps);
@@ -247,8 +322,15 @@ int RunIndexBench(int argc, char** argv) {
               data.maps.size(), static_cast<unsigned long long>(args.seed), data.queries.size(),
               args.retrieve.top_k, args.retrieve.method == Method::kLmd ? "lmd" : "bow",
               args.retrieve.max_offset_m);
-  std::printf("  build: simulate %.1f s, plan + describe %.1f s (%d threads, %.2f ms/map), index add %.2f s\n",
-              data.simulate_s, data.describe_s, args.threads, 1000.0 * data.describe_s / nmaps, add_ms / 1000.0);
+  if (cached) {
+    std::printf("  build: maps described by an earlier run (cache), index add %.2f s\n", add_ms / 1000.0);
+  } else {
+    std::printf("  build: simulate %.1f s, plan + describe %.1f s (%d threads, %.2f ms/map), index add %.2f s\n",
+                data.simulate_s, data.describe_s, args.threads, 1000.0 * data.describe_s / nmaps, add_ms / 1000.0);
+  }
+  if (args.retrieve.max_word_share < 1.0)
+    std::printf("  stop list               %zu words above %.3f of all features\n",
+                index.StopWords(args.retrieve.max_word_share).size(), args.retrieve.max_word_share);
   std::printf("  features per map        %.1f\n", static_cast<double>(features) / nmaps);
   std::printf("  appearance words        %zu distinct, most frequent %.1f%% of features, "
               "%.0f same-word feature pairs per pair of maps\n",

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <string>
 
+#include "bench/bench/fill_bench.h"
 #include "bench/bench/index_bench.h"
 #include "bench/bench/load_bench.h"
 
@@ -9,12 +10,15 @@ int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "index") return lmd::bench::RunIndexBench(argc - 2, argv + 2);
   if (command == "load") return lmd::bench::RunLoadBench(argc - 2, argv + 2);
+  if (command == "fill") return lmd::bench::RunFillBench(argc - 2, argv + 2);
   if (command.empty() || command == "-h" || command == "--help") {
     std::printf("usage: lmd-bench <command> [options]\n"
                 "commands:\n"
                 "  index --maps N [--queries Q] [--json]   inverted file vs exhaustive scorer on simulated maps\n"
                 "  load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]\n"
-                "                                          simulated robots inserting and detecting changes\n");
+                "                                          simulated robots inserting and detecting changes\n"
+                "  fill --server HOST:PORT --collection C --maps N [--scans]\n"
+                "                                          store N simulated maps (scale runs)\n");
     return command.empty() ? 2 : 0;
   }
   std::fprintf(stderr, "lmd-bench: unknown command '%s' (try --help)\n", command.c_str());

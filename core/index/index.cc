@@ -81,6 +81,7 @@ Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
     const uint64_t key = PostingKey(f.word, FloorDiv(f.x, cell0_), FloorDiv(f.y, cell0_));
     auto [it, inserted] = lists_.try_emplace(key);
     if (inserted) word_keys_[f.word].push_back(key);
+    ++word_postings_[f.word];
     const int32_t fine = cell0_ >> options_.pyramid_levels, side = 1 << options_.pyramid_levels;
     const int32_t sx = (f.x - FloorDiv(f.x, cell0_) * cell0_) / fine, sy = (f.y - FloorDiv(f.y, cell0_) * cell0_) / fine;
     it->second.push_back({(slot << 8) | static_cast<uint32_t>(sx * side + sy)});
@@ -116,12 +117,26 @@ bool Index::Remove(uint64_t id) {
       if (keys.empty()) word_keys_.erase(f.word);
     }
   }
+  for (const PoseFeature& f : features) {
+    auto w = word_postings_.find(f.word);
+    if (--w->second == 0) word_postings_.erase(w);
+  }
   posting_count_ -= features.size();
   features = std::vector<PoseFeature>();
   slot_used_[slot] = 0;
   free_slots_.push_back(slot);
   id_to_slot_.erase(found);
   return true;
+}
+
+std::vector<uint32_t> Index::StopWords(double max_share) const {
+  std::vector<uint32_t> stop;
+  if (max_share >= 1.0) return stop;
+  const double limit = max_share * static_cast<double>(posting_count_);
+  for (const auto& kv : word_postings_)
+    if (static_cast<double>(kv.second) > limit) stop.push_back(kv.first);
+  std::sort(stop.begin(), stop.end());
+  return stop;
 }
 
 size_t Index::CountPostingsOfMap(uint64_t id) const {
@@ -140,6 +155,7 @@ size_t Index::MemoryBytes() const {
   size_t bytes = 0;
   for (const auto& kv : lists_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(Posting);
   for (const auto& kv : word_keys_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(uint64_t);
+  bytes += word_postings_.size() * kNode;
   for (const auto& f : slot_features_) bytes += sizeof(f) + f.capacity() * sizeof(PoseFeature);
   bytes += id_to_slot_.size() * kNode + slot_id_.capacity() * (sizeof(uint64_t) + 1);
   return bytes;
@@ -159,7 +175,8 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
   if (!st.ok()) return st;
   auto features = ToPoseFeatures(query, options_);
   if (!features.ok()) return features.status();
-  const PreparedQuery q = PrepareQuery(std::move(features).value(), options_, options);
+  const PreparedQuery q =
+      PrepareQuery(WithoutStopWords(std::move(features).value(), StopWords(options.max_word_share)), options_, options);
   if (options.method == Method::kBow) return RetrieveBow(q, options.top_k, stats);
   return RetrieveLmd(q, options.top_k, stats);
 }

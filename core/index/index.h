@@ -84,6 +84,10 @@ class Index {
   bool Contains(uint64_t id) const { return id_to_slot_.count(id) != 0; }
   const IndexOptions& options() const { return options_; }
 
+  // Words holding more than max_share of all postings (sorted); empty when
+  // max_share >= 1. Retrieve and RetrieveExhaustive drop them from queries.
+  std::vector<uint32_t> StopWords(double max_share) const;
+
   // Total postings (one per indexed feature), and the postings of `id`
   // found by scanning every list (for tests; slow).
   size_t PostingCount() const { return posting_count_; }
@@ -114,6 +118,7 @@ class Index {
   int32_t cell0_ = 100;  // pose units
   std::unordered_map<uint64_t, std::vector<Posting>> lists_;  // PostingKey -> postings
   std::unordered_map<uint32_t, std::vector<uint64_t>> word_keys_;  // word -> its keys (kBow)
+  std::unordered_map<uint32_t, size_t> word_postings_;              // word -> postings
   std::unordered_map<uint64_t, uint32_t> id_to_slot_;
   std::vector<uint64_t> slot_id_;                    // valid where slot_used_
   std::vector<uint8_t> slot_used_;

@@ -67,6 +67,16 @@ Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptio
   return out;
 }
 
+std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, const std::vector<uint32_t>& stop_words) {
+  if (stop_words.empty()) return features;
+  features.erase(std::remove_if(features.begin(), features.end(),
+                                [&](const PoseFeature& f) {
+                                  return std::binary_search(stop_words.begin(), stop_words.end(), f.word);
+                                }),
+                 features.end());
+  return features;
+}
+
 PreparedQuery PrepareQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
                            const RetrieveOptions& options) {
   PreparedQuery q;

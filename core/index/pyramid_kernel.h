@@ -51,6 +51,9 @@ inline constexpr uint32_t kMaxAppearanceWord = 0xFFFF;
 // word exceeds kMaxAppearanceWord.
 Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptions& options);
 
+// `features` without those whose word is in `stop_words` (sorted).
+std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, const std::vector<uint32_t>& stop_words);
+
 // floor(a / b) for b > 0.
 inline int32_t FloorDiv(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 

@@ -28,6 +28,8 @@ Status ValidateRetrieveOptions(const RetrieveOptions& o) {
     return Status::InvalidArgument("max_offset_m must be in [0, 100]");
   if (!(o.offset_bin_m > 0.0) || !(o.offset_bin_m <= 100.0))
     return Status::InvalidArgument("offset_bin_m must be in (0, 100]");
+  if (!(o.max_word_share > 0.0) || !(o.max_word_share <= 1.0))
+    return Status::InvalidArgument("max_word_share must be in (0, 1]");
   if (o.method != Method::kLmd && o.method != Method::kBow)
     return Status::InvalidArgument("unknown method");
   if (o.normalization != Normalization::kNone && o.normalization != Normalization::kMin &&

@@ -49,6 +49,13 @@ struct RetrieveOptions {
   double max_offset_m = 0.5;
   double offset_bin_m = 0.5;         // m; bin of the pose-difference histogram
   Normalization normalization = Normalization::kSqrt;
+  // Stop list (Sivic & Zisserman's "Video Google"): appearance words that hold
+  // more than this fraction of all indexed features are dropped from the
+  // query (|q| counts the remaining features; |d| stays the db map's size).
+  // A word on most features (e.g. a straight-wall word) matches every map,
+  // adds little evidence and defeats any inverted file. In (0, 1];
+  // 1 = no stop list (the paper's kernel, default).
+  double max_word_share = 1.0;
 };
 
 // One retrieved map. db planned position ~= R(orientation * 90 deg) * query

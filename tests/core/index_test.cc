@@ -123,6 +123,44 @@ TEST(IndexTest, InvertedFileAgreesWithExhaustiveWhenMapsShareNoPlace) {
   }
 }
 
+TEST(IndexTest, StopWordsAreDroppedFromQueriesAlikeByBothScorers) {
+  // Word 5 on half of every map's features: a "wall" word.
+  Collection c = MakeCollection(14, 40, 3, 8, 60);
+  for (std::vector<Lmd>* set : {&c.maps, &c.queries})
+    for (Lmd& m : *set)
+      for (size_t i = 0; i < m.features.size(); i += 2) m.features[i].appearance_word = 5;
+  Index index = MakeIndex();
+  for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
+  EXPECT_EQ(index.StopWords(0.3), std::vector<uint32_t>{5});
+  EXPECT_TRUE(index.StopWords(0.6).empty());
+  EXPECT_TRUE(index.StopWords(1.0).empty());
+  for (double share : {0.3, 1.0}) {
+    for (Method method : {Method::kLmd, Method::kBow}) {
+      RetrieveOptions options;
+      options.max_word_share = share;
+      options.method = method;
+      for (const Lmd& q : c.queries) {
+        auto inverted = index.Retrieve(q, options);
+        auto exhaustive = RetrieveExhaustive(index, q, options);
+        ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+        ExpectSameHits(*inverted, *exhaustive);
+      }
+    }
+  }
+  // A query made only of the stop word finds nothing once it is stopped.
+  Lmd walls = c.queries[0];
+  for (Feature& f : walls.features) f.appearance_word = 5;
+  RetrieveOptions options;
+  EXPECT_FALSE(index.Retrieve(walls, options)->empty());
+  options.max_word_share = 0.3;
+  EXPECT_TRUE(index.Retrieve(walls, options)->empty());
+  options.max_word_share = 0;
+  EXPECT_FALSE(index.Retrieve(walls, options).ok());
+  // Removing maps updates the word statistics.
+  for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Remove(m));
+  EXPECT_TRUE(index.StopWords(0.01).empty());
+}
+
 TEST(IndexTest, StoredMapIsItsOwnTopHit) {
   Collection c = MakeCollection(4, 50, 3, 0, 80);
   Index index = MakeIndex();
