@@ -1,0 +1,166 @@
+#include "core/align/correlative_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace lmd {
+namespace {
+
+// The query points rotated by one angle, in level-0 cell coordinates of the
+// db grid, with their allowed block of cell offsets.
+struct Rotation {
+  double theta = 0.0;
+  Point2 target;  // where the centroid lands at offset (0, 0)
+  size_t region = 0;
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // offsets (cells), inclusive
+  std::vector<int32_t> cx, cy;
+};
+
+struct Block {
+  int32_t rotation;
+  int32_t dx, dy;
+  int64_t score;
+};
+
+int64_t ScoreAt(const LikelihoodLevel& level, const Rotation& r, int dx, int dy) {
+  const int ox = dx + level.pad, oy = dy + level.pad;
+  const uint8_t* values = level.values.data();
+  const unsigned w = static_cast<unsigned>(level.width), h = static_cast<unsigned>(level.height);
+  int64_t sum = 0;
+  const size_t n = r.cx.size();
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned x = static_cast<unsigned>(r.cx[i] + ox), y = static_cast<unsigned>(r.cy[i] + oy);
+    if (x < w && y < h) sum += values[y * w + x];
+  }
+  return sum;
+}
+
+class BranchAndBound {
+ public:
+  BranchAndBound(const PreparedMap& db, const std::vector<Rotation>& rotations)
+      : db_(db), rotations_(rotations) {}
+
+  // Depth-first, best child first; candidates at `level` sorted by score.
+  void Search(int level, std::vector<Block>& candidates) {
+    for (const Block& c : candidates) {
+      if (c.score <= best_.score) break;  // sorted: nothing better below
+      if (level == 0) {
+        best_ = c;
+        continue;
+      }
+      const int half = 1 << (level - 1);
+      const Rotation& r = rotations_[c.rotation];
+      std::vector<Block> children;
+      children.reserve(4);
+      for (int ox = 0; ox <= half; ox += half) {
+        const int dx = c.dx + ox;
+        if (dx > r.x1) continue;
+        for (int oy = 0; oy <= half; oy += half) {
+          const int dy = c.dy + oy;
+          if (dy > r.y1) continue;
+          children.push_back({c.rotation, dx, dy, ScoreAt(db_.levels[level - 1], r, dx, dy)});
+          ++evaluations_;
+        }
+      }
+      std::sort(children.begin(), children.end(),
+                [](const Block& a, const Block& b) { return a.score > b.score; });
+      Search(level - 1, children);
+    }
+  }
+
+  Block best_{-1, 0, 0, 0};
+  size_t evaluations_ = 0;
+
+ private:
+  const PreparedMap& db_;
+  const std::vector<Rotation>& rotations_;
+};
+
+}  // namespace
+
+CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, const PreparedMap& db,
+                                    const std::vector<SearchRegion>& regions,
+                                    const CorrelativeOptions& options) {
+  CorrelativeResult result;
+  if (query_points.empty() || db.empty() || regions.empty() || db.levels.empty()) return result;
+  const double cell = db.options.cell_m;
+  Point2 centroid{0, 0};
+  for (const Point2& p : query_points) {
+    centroid.x += p.x;
+    centroid.y += p.y;
+  }
+  centroid.x /= query_points.size();
+  centroid.y /= query_points.size();
+  double radius = 0.0;
+  for (const Point2& p : query_points) radius = std::max(radius, std::hypot(p.x - centroid.x, p.y - centroid.y));
+  double step = options.max_angle_step_deg * M_PI / 180.0;
+  if (radius > cell) step = std::min(step, std::acos(1.0 - cell * cell / (2.0 * radius * radius)));
+  step = std::max(step, 1e-4);
+
+  // Rotations of every region.
+  std::vector<Rotation> rotations;
+  const double max_half = std::max(0.0, options.max_half_window_m);
+  for (size_t ri = 0; ri < regions.size(); ++ri) {
+    const SearchRegion& reg = regions[ri];
+    if (!std::isfinite(reg.theta) || !std::isfinite(reg.centroid_target.x) || !std::isfinite(reg.centroid_target.y)) {
+      continue;
+    }
+    const int n_angle = static_cast<int>(std::ceil(std::max(0.0, reg.half_window_rad) / step));
+    const int wx = static_cast<int>(std::ceil(std::min(max_half, std::max(0.0, reg.half_window_x_m)) / cell));
+    const int wy = static_cast<int>(std::ceil(std::min(max_half, std::max(0.0, reg.half_window_y_m)) / cell));
+    for (int a = -n_angle; a <= n_angle; ++a) {
+      Rotation r;
+      r.theta = reg.theta + a * step;
+      r.target = reg.centroid_target;
+      r.region = ri;
+      r.x0 = -wx; r.x1 = wx; r.y0 = -wy; r.y1 = wy;
+      const double c = std::cos(r.theta), s = std::sin(r.theta);
+      r.cx.resize(query_points.size());
+      r.cy.resize(query_points.size());
+      for (size_t i = 0; i < query_points.size(); ++i) {
+        const double qx = query_points[i].x - centroid.x, qy = query_points[i].y - centroid.y;
+        const double x = c * qx - s * qy + r.target.x, y = s * qx + c * qy + r.target.y;
+        // Clamp far-away points well outside any grid (keeps int arithmetic safe).
+        const double fx = std::floor((x - db.grid_origin.x) / cell), fy = std::floor((y - db.grid_origin.y) / cell);
+        r.cx[i] = static_cast<int32_t>(std::max(-1.0e8, std::min(1.0e8, fx)));
+        r.cy[i] = static_cast<int32_t>(std::max(-1.0e8, std::min(1.0e8, fy)));
+      }
+      rotations.push_back(std::move(r));
+    }
+  }
+  if (rotations.empty()) return result;
+
+  const int top = static_cast<int>(db.levels.size()) - 1;
+  const int top_step = 1 << top;
+  std::vector<Block> candidates;
+  BranchAndBound bnb(db, rotations);
+  bnb.best_.score = static_cast<int64_t>(std::floor(std::max(0.0, options.min_score) * 255.0 * query_points.size()));
+  for (size_t k = 0; k < rotations.size(); ++k) {
+    const Rotation& r = rotations[k];
+    for (int dx = r.x0; dx <= r.x1; dx += top_step) {
+      for (int dy = r.y0; dy <= r.y1; dy += top_step) {
+        candidates.push_back({static_cast<int32_t>(k), dx, dy, ScoreAt(db.levels[top], r, dx, dy)});
+      }
+    }
+  }
+  bnb.evaluations_ = candidates.size();
+  std::sort(candidates.begin(), candidates.end(), [](const Block& a, const Block& b) { return a.score > b.score; });
+  bnb.Search(top, candidates);
+  result.evaluations = bnb.evaluations_;
+  if (bnb.best_.rotation < 0) {
+    bnb.best_ = {0, 0, 0, 0};  // nothing above min_score: report the first rotation's centre, score 0
+  } else {
+    result.found = true;
+  }
+  const Rotation& r = rotations[bnb.best_.rotation];
+  const double c = std::cos(r.theta), s = std::sin(r.theta);
+  const Point2 land{r.target.x + bnb.best_.dx * cell, r.target.y + bnb.best_.dy * cell};
+  result.pose = {land.x - (c * centroid.x - s * centroid.y), land.y - (s * centroid.x + c * centroid.y),
+                 std::remainder(r.theta, 2.0 * M_PI)};
+  result.score = static_cast<double>(bnb.best_.score) / (255.0 * query_points.size());
+  result.region = r.region;
+  return result;
+}
+
+}  // namespace lmd

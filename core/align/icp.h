@@ -1,0 +1,44 @@
+// Local refinement of a query-to-db pose (ICP) and the overlap score that
+// verification ranks by. Point-to-line residuals where the db point has a
+// normal (walls), point-to-point elsewhere, plus a small point-to-point term
+// everywhere so corridors (one normal direction) stay well-posed; Huber
+// weights; Gauss-Newton on (x, y, theta) with Eigen.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/align/prepared_map.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct IcpOptions {
+  int max_iterations = 20;            // Gauss-Newton iterations (each re-finds correspondences)
+  double max_correspondence_m = 0.4;  // m; farther pairs are ignored (<= db neighbour_cell_m)
+  double huber_m = 0.1;               // m; residuals beyond are down-weighted
+  double point_to_point_weight = 0.1; // weight of the point-to-point term on line points
+  double converged_m = 1e-4;          // m (and rad); stop when a step is smaller
+};
+
+// ICP from `initial` (query own frame in db own frame). Returns `initial`
+// when fewer than 3 correspondences exist or the system is singular.
+Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& initial,
+                 const IcpOptions& options = {});
+
+struct Overlap {
+  double fraction = 0.0;  // inliers / query points; 0 for an empty query or db
+  double rms_m = 0.0;     // RMS distance of the inliers to their nearest db point
+  size_t inliers = 0;     // query points within the radius of a db point
+  // Outliers that land in cells the db map saw as free (a wall where the db
+  // map saw through): evidence against the alignment. 0 without free space.
+  size_t conflicts = 0;
+  double conflict_fraction = 0.0;  // conflicts / query points
+};
+
+// Overlap of the query points moved by `pose` with the db points, radius_m
+// (<= db neighbour_cell_m).
+Overlap MeasureOverlap(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
+                       double radius_m);
+
+}  // namespace lmd

@@ -1,0 +1,211 @@
+#include "core/align/prepared_map.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+namespace lmd {
+namespace {
+
+// Level h from level h-1: max over the two half-blocks along x, then along y.
+LikelihoodLevel NextLevel(const LikelihoodLevel& prev, int h) {
+  const int half = 1 << (h - 1);  // block of prev is `half` cells
+  LikelihoodLevel next;
+  next.pad = (1 << h) - 1;
+  const int grow = next.pad - prev.pad;  // = half
+  next.width = prev.width + grow;
+  next.height = prev.height + grow;
+  // prev value at level coords (x, y) (x in [-prev.pad, ...)); 0 outside.
+  auto prev_at = [&](int x, int y) -> uint8_t {
+    const int ix = x + prev.pad, iy = y + prev.pad;
+    if (ix < 0 || iy < 0 || ix >= prev.width || iy >= prev.height) return 0;
+    return prev.values[static_cast<size_t>(iy) * prev.width + ix];
+  };
+  // Pass along x into a temporary with next's width and prev's rows.
+  std::vector<uint8_t> tmp(static_cast<size_t>(next.width) * prev.height, 0);
+  for (int iy = 0; iy < prev.height; ++iy) {
+    const int y = iy - prev.pad;
+    for (int jx = 0; jx < next.width; ++jx) {
+      const int x = jx - next.pad;
+      tmp[static_cast<size_t>(iy) * next.width + jx] = std::max(prev_at(x, y), prev_at(x + half, y));
+    }
+  }
+  auto tmp_at = [&](int jx, int y) -> uint8_t {
+    const int iy = y + prev.pad;
+    if (iy < 0 || iy >= prev.height) return 0;
+    return tmp[static_cast<size_t>(iy) * next.width + jx];
+  };
+  next.values.assign(static_cast<size_t>(next.width) * next.height, 0);
+  for (int jy = 0; jy < next.height; ++jy) {
+    const int y = jy - next.pad;
+    for (int jx = 0; jx < next.width; ++jx) {
+      next.values[static_cast<size_t>(jy) * next.width + jx] = std::max(tmp_at(jx, y), tmp_at(jx, y + half));
+    }
+  }
+  return next;
+}
+
+void BuildPyramid(PreparedMap* m) {
+  const PreparedMapOptions& o = m->options;
+  const double sigma = std::max(1e-3, o.kernel_sigma_m);
+  const double reach = 3.0 * sigma;
+  const int r = static_cast<int>(std::ceil(reach / o.cell_m));
+  m->grid_origin = {m->min_corner.x - (r + 1) * o.cell_m, m->min_corner.y - (r + 1) * o.cell_m};
+  m->grid_width = static_cast<int>(std::ceil((m->max_corner.x - m->grid_origin.x) / o.cell_m)) + r + 2;
+  m->grid_height = static_cast<int>(std::ceil((m->max_corner.y - m->grid_origin.y) / o.cell_m)) + r + 2;
+  LikelihoodLevel base;
+  base.pad = 0;
+  base.width = m->grid_width;
+  base.height = m->grid_height;
+  base.values.assign(static_cast<size_t>(base.width) * base.height, 0);
+  const double inv2s2 = 1.0 / (2.0 * sigma * sigma);
+  for (const Point2& p : m->points) {
+    const int cx = static_cast<int>(std::floor((p.x - m->grid_origin.x) / o.cell_m));
+    const int cy = static_cast<int>(std::floor((p.y - m->grid_origin.y) / o.cell_m));
+    for (int y = std::max(0, cy - r); y <= std::min(base.height - 1, cy + r); ++y) {
+      const double dy = m->grid_origin.y + (y + 0.5) * o.cell_m - p.y;
+      for (int x = std::max(0, cx - r); x <= std::min(base.width - 1, cx + r); ++x) {
+        const double dx = m->grid_origin.x + (x + 0.5) * o.cell_m - p.x;
+        const double d2 = dx * dx + dy * dy;
+        if (d2 > reach * reach) continue;
+        const uint8_t v = static_cast<uint8_t>(std::lround(255.0 * std::exp(-d2 * inv2s2)));
+        uint8_t& cell = base.values[static_cast<size_t>(y) * base.width + x];
+        cell = std::max(cell, v);
+      }
+    }
+  }
+  m->levels.clear();
+  m->levels.push_back(std::move(base));
+  for (int h = 1; h < o.levels; ++h) m->levels.push_back(NextLevel(m->levels.back(), h));
+}
+
+void BuildBuckets(PreparedMap* m) {
+  const double c = m->options.neighbour_cell_m;
+  m->bucket_origin = {m->min_corner.x - c, m->min_corner.y - c};
+  m->bucket_width = static_cast<int>(std::floor((m->max_corner.x - m->bucket_origin.x) / c)) + 2;
+  m->bucket_height = static_cast<int>(std::floor((m->max_corner.y - m->bucket_origin.y) / c)) + 2;
+  const size_t cells = static_cast<size_t>(m->bucket_width) * m->bucket_height;
+  std::vector<uint32_t> cell_of(m->points.size());
+  m->bucket_start.assign(cells + 1, 0);
+  for (size_t i = 0; i < m->points.size(); ++i) {
+    const int bx = static_cast<int>(std::floor((m->points[i].x - m->bucket_origin.x) / c));
+    const int by = static_cast<int>(std::floor((m->points[i].y - m->bucket_origin.y) / c));
+    cell_of[i] = static_cast<uint32_t>(by * m->bucket_width + bx);
+    ++m->bucket_start[cell_of[i] + 1];
+  }
+  for (size_t k = 0; k < cells; ++k) m->bucket_start[k + 1] += m->bucket_start[k];
+  m->bucket_points.resize(m->points.size());
+  std::vector<uint32_t> fill(m->bucket_start.begin(), m->bucket_start.end() - 1);
+  for (size_t i = 0; i < m->points.size(); ++i) m->bucket_points[fill[cell_of[i]]++] = static_cast<uint32_t>(i);
+}
+
+// Calls f(index) for every map point in the 3x3 buckets around p.
+template <typename F>
+void ForNeighbourBuckets(const PreparedMap& m, const Point2& p, F&& f) {
+  const double c = m.options.neighbour_cell_m;
+  const double fx = std::floor((p.x - m.bucket_origin.x) / c);
+  const double fy = std::floor((p.y - m.bucket_origin.y) / c);
+  if (!(fx >= -1.0 && fy >= -1.0 && fx <= m.bucket_width && fy <= m.bucket_height)) return;  // also NaN
+  const int bx = static_cast<int>(fx), by = static_cast<int>(fy);
+  for (int y = std::max(0, by - 1); y <= std::min(m.bucket_height - 1, by + 1); ++y) {
+    for (int x = std::max(0, bx - 1); x <= std::min(m.bucket_width - 1, bx + 1); ++x) {
+      const size_t k = static_cast<size_t>(y) * m.bucket_width + x;
+      for (uint32_t j = m.bucket_start[k]; j < m.bucket_start[k + 1]; ++j) f(m.bucket_points[j]);
+    }
+  }
+}
+
+void BuildNormals(PreparedMap* m) {
+  const double r2 = m->options.normal_radius_m * m->options.normal_radius_m;
+  m->normals.assign(m->points.size(), Point2{0, 0});
+  for (size_t i = 0; i < m->points.size(); ++i) {
+    const Point2 p = m->points[i];
+    double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+    int n = 0;
+    ForNeighbourBuckets(*m, p, [&](uint32_t j) {
+      const double dx = m->points[j].x - p.x, dy = m->points[j].y - p.y;
+      if (dx * dx + dy * dy > r2) return;
+      sx += dx; sy += dy; sxx += dx * dx; sxy += dx * dy; syy += dy * dy;
+      ++n;
+    });
+    if (n < 3) continue;
+    const double mx = sx / n, my = sy / n;
+    Eigen::Matrix2d cov;
+    cov << sxx / n - mx * mx, sxy / n - mx * my, sxy / n - mx * my, syy / n - my * my;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+    const Eigen::Vector2d ev = es.eigenvalues();  // ascending
+    if (!(ev(1) > 0) || ev(0) > 0.2 * ev(1)) continue;  // not line-like
+    const Eigen::Vector2d nrm = es.eigenvectors().col(0);
+    m->normals[i] = {nrm.x(), nrm.y()};
+  }
+}
+
+}  // namespace
+
+size_t PreparedMap::MemoryBytes() const {
+  size_t bytes = points.size() * sizeof(Point2) * 2 + bucket_start.size() * 4 + bucket_points.size() * 4;
+  for (const LikelihoodLevel& l : levels) bytes += l.values.size();
+  bytes += occupancy.cells().size();
+  return bytes;
+}
+
+PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options) {
+  PreparedMap m;
+  m.options = options;
+  m.options.cell_m = std::max(0.01, options.cell_m);
+  m.options.levels = std::min(12, std::max(1, options.levels));
+  m.options.neighbour_cell_m = std::max(0.01, options.neighbour_cell_m);
+  m.points.reserve(points.size());
+  for (const Point2& p : points) {
+    if (std::isfinite(p.x) && std::isfinite(p.y)) m.points.push_back(p);
+  }
+  if (m.points.empty()) return m;
+  m.min_corner = m.max_corner = m.points[0];
+  for (const Point2& p : m.points) {
+    m.min_corner.x = std::min(m.min_corner.x, p.x);
+    m.min_corner.y = std::min(m.min_corner.y, p.y);
+    m.max_corner.x = std::max(m.max_corner.x, p.x);
+    m.max_corner.y = std::max(m.max_corner.y, p.y);
+  }
+  m.heading = EstimateDominantOrientation(m.points, options.orientation);
+  BuildPyramid(&m);
+  BuildBuckets(&m);
+  BuildNormals(&m);
+  return m;
+}
+
+PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options) {
+  PreparedMap m = PreparePoints(map.points, options);
+  if (options.free_space && !m.empty() && (!map.scans.empty() || !map.trajectory.empty())) {
+    m.occupancy = BuildOccupancyGrid(map, 0.0, options.free_grid);
+  }
+  return m;
+}
+
+bool InFreeSpace(const PreparedMap& map, const Point2& p) {
+  if (map.occupancy.width() <= 1 || !std::isfinite(p.x) || !std::isfinite(p.y)) return false;
+  const double fx = std::floor((p.x - map.occupancy.min_x()) / map.occupancy.cell_m());
+  const double fy = std::floor((p.y - map.occupancy.min_y()) / map.occupancy.cell_m());
+  if (!(fx >= 0 && fy >= 0 && fx < map.occupancy.width() && fy < map.occupancy.height())) return false;
+  return map.occupancy.at(static_cast<int>(fx), static_cast<int>(fy)) == CellState::kFree;
+}
+
+int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, double* dist2) {
+  if (map.points.empty() || !std::isfinite(p.x) || !std::isfinite(p.y)) return -1;
+  double best = std::min(max_dist_m, map.options.neighbour_cell_m);
+  best *= best;
+  int best_index = -1;
+  ForNeighbourBuckets(map, p, [&](uint32_t j) {
+    const double dx = map.points[j].x - p.x, dy = map.points[j].y - p.y;
+    const double d2 = dx * dx + dy * dy;
+    if (d2 <= best) {
+      best = d2;
+      best_index = static_cast<int>(j);
+    }
+  });
+  if (best_index >= 0 && dist2) *dist2 = best;
+  return best_index;
+}
+
+}  // namespace lmd

@@ -1,0 +1,137 @@
+#include "core/align/scan_match.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "core/viewpoint/orientation.h"
+
+namespace lmd {
+namespace {
+
+std::vector<Point2> Subsample(const std::vector<Point2>& points, double cell_m) {
+  if (cell_m <= 0.0) return points;
+  std::unordered_set<uint64_t> seen;
+  std::vector<Point2> out;
+  for (const Point2& p : points) {
+    const int64_t cx = static_cast<int64_t>(std::floor(p.x / cell_m));
+    const int64_t cy = static_cast<int64_t>(std::floor(p.y / cell_m));
+    const uint64_t key = (static_cast<uint64_t>(cx) << 32) ^ static_cast<uint64_t>(cy & 0xffffffff);
+    if (seen.insert(key).second) out.push_back(p);
+  }
+  return out;
+}
+
+Point2 Apply(const Pose2& pose, const Point2& p) {
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  return {pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y};
+}
+
+// Correlative search over `regions`, ICP, score. region_guess maps a region to its guess index.
+ScanMatch Match(const PreparedQuery& query, const PreparedMap& db, const std::vector<SearchRegion>& regions,
+                const std::vector<int>& region_guess, const ScanMatchOptions& options) {
+  ScanMatch m;
+  const CorrelativeResult coarse = CorrelativeSearch(query.search_points, db, regions, options.correlative);
+  m.pose = coarse.pose;
+  m.search_score = coarse.score;
+  m.search_evaluations = coarse.evaluations;
+  m.guess = coarse.region < region_guess.size() ? region_guess[coarse.region] : -1;
+  if (!coarse.found) return m;
+  const Overlap before = MeasureOverlap(query.points, db, coarse.pose, options.inlier_radius_m);
+  const Pose2 refined = RefinePose(query.points, db, coarse.pose, options.icp);
+  const Overlap after = MeasureOverlap(query.points, db, refined, options.inlier_radius_m);
+  const bool keep_refined = after.fraction >= before.fraction;
+  const Overlap& o = keep_refined ? after : before;
+  m.pose = keep_refined ? refined : coarse.pose;
+  m.score = o.fraction;
+  m.inlier_rms_m = o.rms_m;
+  m.inliers = o.inliers;
+  m.conflict_fraction = o.conflict_fraction;
+  return m;
+}
+
+bool SameRegion(const SearchRegion& a, const SearchRegion& b) {
+  return std::abs(std::remainder(a.theta - b.theta, 2.0 * M_PI)) < 1e-3 &&
+         std::hypot(a.centroid_target.x - b.centroid_target.x, a.centroid_target.y - b.centroid_target.y) < 0.05;
+}
+
+bool Matchable(const PreparedQuery& query, const PreparedMap& db, const ScanMatchOptions& options) {
+  const size_t min_points = std::max<size_t>(1, options.min_points);
+  return query.points.size() >= min_points && db.points.size() >= min_points;
+}
+
+}  // namespace
+
+PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options) {
+  PreparedQuery q;
+  q.points.reserve(query.points.size());
+  for (const Point2& p : query.points) {
+    if (std::isfinite(p.x) && std::isfinite(p.y)) q.points.push_back(p);
+  }
+  q.search_points = Subsample(q.points, options.search_cell_m);
+  for (const Point2& p : q.search_points) {
+    q.centroid.x += p.x;
+    q.centroid.y += p.y;
+  }
+  if (!q.search_points.empty()) {
+    q.centroid.x /= q.search_points.size();
+    q.centroid.y /= q.search_points.size();
+  }
+  q.heading = EstimateDominantOrientation(q.points, options.map.orientation);
+  return q;
+}
+
+ScanMatch MatchLocalMaps(const PreparedQuery& query, const PreparedMap& db, const std::vector<Pose2>& guesses,
+                         const ScanMatchOptions& options) {
+  if (guesses.empty()) return MatchLocalMapsGlobal(query, db, options);
+  std::vector<SearchRegion> regions;
+  std::vector<int> region_guess;
+  const int turns = options.quarter_turns ? 4 : 1;
+  for (size_t g = 0; g < guesses.size(); ++g) {
+    const Point2 target = Apply(guesses[g], query.centroid);
+    for (int k = 0; k < turns; ++k) {
+      SearchRegion r;
+      r.theta = guesses[g].theta + k * (M_PI / 2);
+      r.half_window_rad = options.window_deg * M_PI / 180.0;
+      r.centroid_target = target;
+      r.half_window_x_m = r.half_window_y_m = options.window_m;
+      bool duplicate = false;
+      for (const SearchRegion& other : regions) duplicate = duplicate || SameRegion(r, other);
+      if (duplicate) continue;
+      regions.push_back(r);
+      region_guess.push_back(static_cast<int>(g));
+    }
+  }
+  ScanMatch m;
+  if (Matchable(query, db, options)) m = Match(query, db, regions, region_guess, options);
+  if (m.score == 0.0 && m.search_score == 0.0) {
+    m.pose = guesses[0];
+    m.guess = 0;
+  }
+  return m;
+}
+
+ScanMatch MatchLocalMaps(const LocalMap& query, const LocalMap& db, const std::vector<Pose2>& guesses,
+                         const ScanMatchOptions& options) {
+  return MatchLocalMaps(PrepareQuery(query, options), PrepareMap(db, options.map), guesses, options);
+}
+
+ScanMatch MatchLocalMapsGlobal(const PreparedQuery& query, const PreparedMap& db, const ScanMatchOptions& options) {
+  ScanMatch m;
+  if (!Matchable(query, db, options)) return m;
+  std::vector<SearchRegion> regions;
+  const Point2 centre{(db.min_corner.x + db.max_corner.x) / 2, (db.min_corner.y + db.max_corner.y) / 2};
+  const int turns = std::max(1, static_cast<int>(std::lround(360.0 / std::max(1.0, options.global_turn_deg))));
+  for (int k = 0; k < turns; ++k) {
+    SearchRegion r;
+    r.theta = db.heading - query.heading + k * (2.0 * M_PI / turns);
+    r.half_window_rad = options.global_window_deg * M_PI / 180.0;
+    r.centroid_target = centre;
+    r.half_window_x_m = (db.max_corner.x - db.min_corner.x) / 2 + options.global_margin_m;
+    r.half_window_y_m = (db.max_corner.y - db.min_corner.y) / 2 + options.global_margin_m;
+    regions.push_back(r);
+  }
+  return Match(query, db, regions, std::vector<int>(regions.size(), -1), options);
+}
+
+}  // namespace lmd

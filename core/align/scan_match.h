@@ -1,0 +1,82 @@
+// Scan matching of two local maps: the pose of the query map's own frame in
+// the db map's own frame, and how well the maps then overlap. Used to verify
+// retrieval hits geometrically (verify_hits.h) and to refine their pose.
+//
+//   1. correlative branch-and-bound search (correlative_search.h) on the
+//      query points subsampled to search_cell_m, over windows around the
+//      guesses (and their quarter turns: planned frames of Manhattan places
+//      are ambiguous modulo 90 deg), or, guess-free, over the whole db map
+//      with the rotation known modulo 90 deg from the two entropy compasses;
+//   2. ICP (icp.h) on all query points from the best lattice pose;
+//   3. score = fraction of query points within inlier_radius_m of a db point.
+//
+// The db side is a PreparedMap (prepared_map.h): build it once per stored map.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/align/correlative_search.h"
+#include "core/align/icp.h"
+#include "core/align/prepared_map.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct ScanMatchOptions {
+  PreparedMapOptions map;          // used where this module prepares a db map itself
+  double inlier_radius_m = 0.3;    // m; score radius (place-recall protocol: 0.3)
+  size_t min_points = 10;          // a query or db map with fewer points is not matched (score 0)
+  double search_cell_m = 0.3;      // m; query points kept one per cell for the search (0 = all)
+  // Around each guess: the query centroid may move +-window_m per axis and the
+  // angle +-window_deg. 2 m / 10 deg covers planned-frame errors of a few metres.
+  double window_m = 2.0;
+  double window_deg = 10.0;
+  bool quarter_turns = true;       // also search each guess turned by 90, 180, 270 deg (about the centroid)
+  // Guess-free: rotations h_db - h_query + k global_turn_deg +- global_window_deg,
+  // the query centroid anywhere in the db bounding box grown by global_margin_m.
+  // 90 = the compasses' ambiguity; 45 also survives a compass off by 45 deg
+  // (seen on ~3 % of real pairs) at twice the cost.
+  double global_turn_deg = 90.0;
+  double global_window_deg = 4.0;
+  double global_margin_m = 3.0;
+  CorrelativeOptions correlative;
+  IcpOptions icp;
+};
+
+// The query side, computed once per query and reused for every candidate.
+struct PreparedQuery {
+  std::vector<Point2> points;         // finite points, own frame (ICP, score)
+  std::vector<Point2> search_points;  // subsampled to search_cell_m (correlative search)
+  Point2 centroid;                    // mean of search_points
+  double heading = 0.0;               // rad in [0, pi/2), entropy compass
+};
+PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options = {});
+
+struct ScanMatch {
+  Pose2 pose;                 // query own frame in db own frame
+  double score = 0.0;         // fraction of query points within inlier_radius_m after alignment, [0, 1]
+  double inlier_rms_m = 0.0;  // RMS distance of those inliers
+  size_t inliers = 0;
+  double conflict_fraction = 0.0;  // query points in db free space (not inliers) / query points
+  double search_score = 0.0;  // mean likelihood at the correlative optimum, [0, 1]
+  int guess = -1;             // index of the guess whose window held the optimum; -1 = guess-free
+  size_t search_evaluations = 0;  // block scores the search computed (cost measure)
+};
+
+// Best pose within the windows around `guesses` (query own frame in db own
+// frame). No guesses: same as MatchLocalMapsGlobal. A query or db with fewer
+// than min_points points gives score 0 and the first guess (or identity) as
+// pose; never fails.
+ScanMatch MatchLocalMaps(const PreparedQuery& query, const PreparedMap& db, const std::vector<Pose2>& guesses,
+                         const ScanMatchOptions& options = {});
+// Convenience: prepares both sides (use the form above to match many pairs).
+ScanMatch MatchLocalMaps(const LocalMap& query, const LocalMap& db, const std::vector<Pose2>& guesses,
+                         const ScanMatchOptions& options = {});
+
+// Guess-free: the whole db map, rotation from the two maps' dominant
+// orientations modulo 90 deg. Slower than a guided match (several times).
+ScanMatch MatchLocalMapsGlobal(const PreparedQuery& query, const PreparedMap& db,
+                               const ScanMatchOptions& options = {});
+
+}  // namespace lmd

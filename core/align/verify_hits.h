@@ -1,0 +1,58 @@
+// Geometric verification of retrieval hits: re-rank the index's top-N
+// candidates by how well the query map's points align with each candidate's
+// points (scan_match.h), and attach the refined metric pose.
+//
+// Policy, per candidate: match within the windows around its guesses (the
+// poses its retrieval hit implies, e.g. RelativePose for each orientation);
+// if that scores below global_below_score (or there are no guesses) and
+// global_search is on, also run the guess-free search and keep the better of
+// the two. Verification score = overlap score - conflict_weight * conflict
+// fraction (query points the db map saw as free space): a wrong place that
+// shares walls with the query usually also puts walls in its free space.
+// Candidates are then ordered by verification score (descending), exact ties
+// by retrieval score (descending), then by input order; candidates beyond
+// max_candidates follow, unverified, in input order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/align/prepared_map.h"
+#include "core/align/scan_match.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct HitCandidate {
+  uint64_t map_id = 0;
+  std::shared_ptr<const PreparedMap> db;  // prepared db map; null = scores 0
+  double retrieval_score = 0.0;           // the index's score (tie-breaker)
+  std::vector<Pose2> guesses;             // query own frame in db own frame; may be empty
+};
+
+struct VerifyOptions {
+  ScanMatchOptions match;
+  bool global_search = true;         // fall back to the guess-free search (see policy)
+  double global_below_score = 0.5;   // guided verification score under which the guess-free search runs
+  double conflict_weight = 1.0;      // weight of the free-space conflict fraction in the verification score
+  size_t max_candidates = 0;         // verify only the first N candidates (0 = all); the rest follow unverified
+};
+
+struct VerifiedHit {
+  uint64_t map_id = 0;
+  double retrieval_score = 0.0;
+  size_t retrieval_rank = 0;  // position in the input
+  bool verified = false;      // false when beyond max_candidates
+  double score = 0.0;         // verification score (see policy); 0 if unverified or unmatchable
+  ScanMatch match;            // pose (query own frame in db own frame), overlap, conflicts
+};
+
+// Candidates re-ordered as described above; never fails (degenerate maps score 0).
+std::vector<VerifiedHit> VerifyHits(const LocalMap& query, const std::vector<HitCandidate>& candidates,
+                                    const VerifyOptions& options = {});
+std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vector<HitCandidate>& candidates,
+                                    const VerifyOptions& options = {});
+
+}  // namespace lmd

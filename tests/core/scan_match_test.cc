@@ -1,0 +1,224 @@
+#include "core/align/scan_match.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/align/verify_hits.h"
+#include "core/eval/ground_truth.h"
+#include "core/localmap/pose_ops.h"
+#include "core/sim/simulate.h"
+
+namespace lmd {
+namespace {
+
+const std::vector<LocalMap>& DemoMaps() {
+  static const std::vector<LocalMap> maps = SimulateLocalMaps(DefaultDemoOptions());
+  return maps;
+}
+
+// A map with plenty of structure: the demo map with the most points.
+const LocalMap& RichMap() {
+  const std::vector<LocalMap>& maps = DemoMaps();
+  return *std::max_element(maps.begin(), maps.end(), [](const LocalMap& a, const LocalMap& b) {
+    return a.points.size() < b.points.size();
+  });
+}
+
+// The map's points seen from a frame placed at `pose` in its own frame: the
+// pose of the returned map's own frame in `map`'s own frame is `pose`.
+LocalMap MovedCopy(const LocalMap& map, const Pose2& pose) {
+  LocalMap out;
+  out.id = map.id + "-moved";
+  const Pose2 inv = Inverse(pose);
+  for (const Point2& p : map.points) out.points.push_back(TransformPoint(inv, p));
+  return out;
+}
+
+double TranslationError(const Pose2& a, const Pose2& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double AngleErrorDeg(const Pose2& a, const Pose2& b) {
+  return std::abs(NormalizeAngle(a.theta - b.theta)) * 180.0 / M_PI;
+}
+double Deg(double d) { return d * M_PI / 180.0; }
+
+const std::vector<Pose2>& KnownTransforms() {
+  static const std::vector<Pose2> poses = {
+      {3.0, 0.0, 0.0}, {0.0, -3.0, Deg(90)}, {1.5, 2.0, Deg(180)}, {-3.0, 1.0, Deg(-90)}, {0.4, -0.7, Deg(30)},
+  };
+  return poses;
+}
+
+TEST(ScanMatchTest, GuessFreeSearchRecoversKnownRigidTransforms) {
+  const LocalMap& db = RichMap();
+  const PreparedMap prepared = PrepareMap(db);
+  for (const Pose2& truth : KnownTransforms()) {
+    const ScanMatch m = MatchLocalMapsGlobal(PrepareQuery(MovedCopy(db, truth)), prepared);
+    EXPECT_LT(TranslationError(m.pose, truth), 0.05) << truth.x << " " << truth.y << " " << truth.theta;
+    EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5) << truth.theta;
+    EXPECT_GT(m.score, 0.99);
+    EXPECT_LT(m.inlier_rms_m, 0.01);
+  }
+}
+
+TEST(ScanMatchTest, ConvergesFromAGuessOffByMetresAndDegrees) {
+  const LocalMap& db = RichMap();
+  const PreparedMap prepared = PrepareMap(db);
+  for (const Pose2& truth : KnownTransforms()) {
+    const PreparedQuery query = PrepareQuery(MovedCopy(db, truth));
+    const Pose2 bad{truth.x + 1.2, truth.y - 0.9, truth.theta + Deg(8)};  // 1.5 m, 8 deg off
+    const ScanMatch m = MatchLocalMaps(query, prepared, {bad});
+    EXPECT_LT(TranslationError(m.pose, truth), 0.05);
+    EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5);
+    EXPECT_EQ(m.guess, 0);
+  }
+}
+
+TEST(ScanMatchTest, QuarterTurnsResolveAGuessOffBy90Degrees) {
+  const LocalMap& db = RichMap();
+  const Pose2 truth{1.0, -2.0, Deg(20)};
+  const Pose2 turned{truth.x, truth.y, truth.theta + Deg(90)};
+  // The guess's frame is turned about the query centroid's image, as two
+  // Manhattan frames disagreeing by 90 deg would be: rotate about the centroid.
+  const LocalMap query_map = MovedCopy(db, truth);
+  const PreparedQuery query = PrepareQuery(query_map);
+  const Point2 c = TransformPoint(truth, query.centroid);
+  const Point2 rc = TransformPoint(turned, query.centroid);
+  const Pose2 guess{turned.x + c.x - rc.x, turned.y + c.y - rc.y, turned.theta};
+  const ScanMatch m = MatchLocalMaps(query_map, db, {guess});
+  EXPECT_LT(TranslationError(m.pose, truth), 0.05);
+  EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5);
+}
+
+// The demo world repeats rooms and corridors, so a different place can align
+// well (guess-free scores up to ~0.8 there); what is pinned is that a place
+// seen again outscores different places far more often than not.
+TEST(ScanMatchTest, SamePlaceMostlyOutscoresDifferentPlaces) {
+  const std::vector<LocalMap>& maps = DemoMaps();
+  std::vector<double> same, different;
+  for (size_t i = 0; i < maps.size() && (same.size() < 8 || different.size() < 8); i += 7) {
+    for (size_t j = i + 15; j < maps.size(); j += 11) {
+      const double overlap = PlaceOverlap(maps[i], maps[j]);
+      const bool want_same = overlap >= 0.5 && same.size() < 8;
+      const bool want_different = overlap == 0.0 && different.size() < 8;
+      if (!want_same && !want_different) continue;
+      const ScanMatch m = MatchLocalMapsGlobal(PrepareQuery(maps[i]), PrepareMap(maps[j]));
+      (want_same ? same : different).push_back(m.score);
+      break;
+    }
+  }
+  ASSERT_EQ(same.size(), 8u);
+  ASSERT_EQ(different.size(), 8u);
+  int wins = 0;
+  for (double s : same) {
+    for (double d : different) wins += s > d;
+  }
+  EXPECT_GE(wins, 40);  // of 64 (same, different) comparisons
+  std::sort(same.begin(), same.end());
+  EXPECT_GE(same.front(), 0.5);  // a place seen again always aligns with at least its overlap
+}
+
+TEST(ScanMatchTest, VerifyHitsMovesTheTruePlaceFromFifthToFirst) {
+  const std::vector<LocalMap>& maps = DemoMaps();
+  // A query with one relevant map (overlap >= 0.85: the demo world repeats
+  // rooms, so a partial overlap can lose to an alias) and four unrelated ones.
+  size_t query = 0, relevant = maps.size();
+  std::vector<size_t> wrong;
+  for (size_t i = 0; i < maps.size() && relevant == maps.size(); i += 13) {
+    for (size_t j = i + 15; j < maps.size(); ++j) {
+      if (PlaceOverlap(maps[i], maps[j]) >= 0.85) {
+        query = i;
+        relevant = j;
+        break;
+      }
+    }
+  }
+  ASSERT_LT(relevant, maps.size());
+  for (size_t j = 0; j < maps.size() && wrong.size() < 4; j += 17) {
+    if (j != query && PlaceOverlap(maps[query], maps[j]) == 0.0) wrong.push_back(j);
+  }
+  ASSERT_EQ(wrong.size(), 4u);
+  std::vector<HitCandidate> candidates;
+  for (size_t k = 0; k < wrong.size(); ++k) {
+    candidates.push_back({100 + k, std::make_shared<PreparedMap>(PrepareMap(maps[wrong[k]])), 0.9 - 0.1 * k, {}});
+  }
+  // The true place comes with a retrieval-like guess (1.3 m, 6 deg off); the
+  // others with none (guess-free search).
+  const Pose2 truth = Compose(Inverse(maps[relevant].truth.global_frame), maps[query].truth.global_frame);
+  const Pose2 guess{truth.x + 1.0, truth.y - 0.8, truth.theta + Deg(6)};
+  candidates.push_back({7, std::make_shared<PreparedMap>(PrepareMap(maps[relevant])), 0.1, {guess}});
+  const std::vector<VerifiedHit> hits = VerifyHits(maps[query], candidates);
+  ASSERT_EQ(hits.size(), 5u);
+  EXPECT_EQ(hits[0].map_id, 7u);
+  EXPECT_EQ(hits[0].retrieval_rank, 4u);
+  EXPECT_TRUE(hits[0].verified);
+  // The refined pose is the true one (query own frame in db own frame).
+  EXPECT_LT(TranslationError(hits[0].match.pose, truth), 0.2);
+  EXPECT_LT(AngleErrorDeg(hits[0].match.pose, truth), 2.0);
+}
+
+TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
+  std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}}, {2, nullptr, 0.5, {}}, {3, nullptr, 0.9, {}}};
+  VerifyOptions options;
+  options.max_candidates = 2;
+  const std::vector<VerifiedHit> hits = VerifyHits(RichMap(), candidates, options);
+  ASSERT_EQ(hits.size(), 3u);
+  EXPECT_EQ(hits[0].map_id, 2u);  // both verified ones score 0: retrieval score decides
+  EXPECT_EQ(hits[1].map_id, 1u);
+  EXPECT_EQ(hits[2].map_id, 3u);  // beyond max_candidates: last, unverified
+  EXPECT_FALSE(hits[2].verified);
+}
+
+TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
+  const LocalMap& rich = RichMap();
+  LocalMap empty;
+  LocalMap one;
+  one.points = {{1.0, 2.0}};
+  LocalMap not_finite;
+  not_finite.points = {{NAN, 1.0}, {INFINITY, 0.0}};
+  const Pose2 guess{0.5, 0.5, 0.1};
+  const std::vector<const LocalMap*> inputs = {&empty, &one, &not_finite, &rich};
+  for (const LocalMap* q : inputs) {
+    for (const LocalMap* d : inputs) {
+      if (q == &rich && d == &rich) continue;
+      const ScanMatch guided = MatchLocalMaps(*q, *d, {guess});
+      EXPECT_EQ(guided.score, 0.0);
+      EXPECT_DOUBLE_EQ(guided.pose.x, guess.x);
+      EXPECT_EQ(MatchLocalMaps(*q, *d, {}).score, 0.0);
+      EXPECT_EQ(MatchLocalMapsGlobal(PrepareQuery(*q), PrepareMap(*d)).score, 0.0);
+    }
+  }
+  std::vector<HitCandidate> candidates = {{1, std::make_shared<PreparedMap>(PrepareMap(empty)), 1.0, {guess}},
+                                          {2, std::make_shared<PreparedMap>(PrepareMap(one)), 0.5, {}}};
+  for (const VerifiedHit& h : VerifyHits(empty, candidates)) EXPECT_EQ(h.score, 0.0);
+  for (const VerifiedHit& h : VerifyHits(one, candidates)) EXPECT_EQ(h.score, 0.0);
+}
+
+TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
+  const PreparedMap m = PrepareMap(RichMap());
+  ASSERT_GE(m.levels.size(), 2u);
+  // Level h at (x, y) is the max of level 0 over the 2^h block starting there.
+  const LikelihoodLevel& l0 = m.levels[0];
+  for (size_t h = 1; h < m.levels.size(); ++h) {
+    const LikelihoodLevel& lh = m.levels[h];
+    const int block = 1 << h;
+    for (int y = -lh.pad; y < lh.height - lh.pad; y += 7) {
+      for (int x = -lh.pad; x < lh.width - lh.pad; x += 5) {
+        uint8_t expect = 0;
+        for (int by = y; by < y + block; ++by) {
+          for (int bx = x; bx < x + block; ++bx) {
+            if (bx >= 0 && by >= 0 && bx < l0.width && by < l0.height) {
+              expect = std::max(expect, l0.values[static_cast<size_t>(by) * l0.width + bx]);
+            }
+          }
+        }
+        ASSERT_EQ(lh.values[static_cast<size_t>(y + lh.pad) * lh.width + x + lh.pad], expect) << h << " " << x << " " << y;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lmd
