@@ -15,7 +15,14 @@ void Usage(std::FILE* out) {
                "      every relevant pair; writes DIR/viewpoints.json (default DIR: out). Without --log:\n"
                "      every *.log.gz of $LMD_DATA_DIR or ../shared/data next to the repository.\n"
                "  render (--log FILE | --demo) [--map INDEX] --out FILE.svg\n"
-               "      picture of one local map: grid, walls, rooms, trajectory, CoG and CoR, features.\n");
+               "      picture of one local map: grid, walls, rooms, trajectory, CoG and CoR, features.\n"
+               "  retrieval [--log FILE...] [--out DIR] [--seed N] [--threads N] [--methods k1,k2] [--no-ablations]\n"
+               "            [--max-queries N]\n"
+               "      the paper's experiment (simulated change in every query) for BoW, LMD+CoG, LMD+CoR,\n"
+               "      stationary, descriptor settings #1..#8 and the product default (best) with ablations;\n"
+               "      writes DIR/results.json, DIR/report.md and SVG plots (default DIR: out/retrieval).\n"
+               "  export --log FILE... --out DIR\n"
+               "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
 }
 
 }  // namespace
@@ -28,6 +35,8 @@ int main(int argc, char** argv) {
   }
   if (command == "viewpoints") return lmd::eval::RunViewpoints(argc - 2, argv + 2);
   if (command == "render") return lmd::eval::RunRender(argc - 2, argv + 2);
+  if (command == "retrieval") return lmd::eval::RunRetrieval(argc - 2, argv + 2);
+  if (command == "export") return lmd::eval::RunExport(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);
   return 2;

@@ -1,0 +1,127 @@
+#include "bench/eval/eval_dataset.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "bench/eval/data_paths.h"
+#include "core/io/carmen_reader.h"
+#include "core/localmap/local_map_builder.h"
+#include "core/localmap/pose_ops.h"
+#include "core/util/progress_bar.h"
+
+namespace lmd::eval {
+
+void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn) {
+  const int t = std::max(1, threads);
+  if (t == 1 || n < 2) {
+    for (size_t i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::atomic<size_t> next{0};
+  std::vector<std::thread> workers;
+  for (int k = 0; k < t; ++k) {
+    workers.emplace_back([&] {
+      for (size_t i = next++; i < n; i = next++) fn(i);
+    });
+  }
+  for (std::thread& w : workers) w.join();
+}
+
+Pose2 Dataset::TruePose(size_t query_map, size_t db_map) const {
+  return Compose(Inverse(maps[db_map].truth.global_frame), maps[query_map].truth.global_frame);
+}
+
+bool Dataset::ShowsPlace(const EvalQuery& q, size_t db_map) const {
+  return std::binary_search(q.places.begin(), q.places.end(), db_map);
+}
+
+namespace {
+
+uint64_t Fnv1a(const std::string& s) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : s) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
+struct Box {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  bool Meets(const Box& o, double margin) const {
+    return x0 - margin <= o.x1 && o.x0 - margin <= x1 && y0 - margin <= o.y1 && o.y0 - margin <= y1;
+  }
+};
+
+}  // namespace
+
+Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Dataset d;
+  d.name = DatasetName(log_path);
+  Result<LaserLog> log = ReadCarmenLog(log_path);
+  if (!log.ok()) return log.status();
+  LocalMapOptions lm;
+  lm.id_prefix = d.name;
+  d.maps = BuildLocalMaps(*log, lm);
+  const std::vector<RelevantPair> pairs = FindRelevantPairs(d.maps, GroundTruthOptions{10.0, 0.5,
+                                                                 static_cast<size_t>(std::max(1, options.threads))});
+  // Global points, boxes and grids for place truth.
+  const size_t n = d.maps.size();
+  std::vector<std::vector<Point2>> global(n);
+  std::vector<Box> boxes(n);
+  std::vector<PointGrid> grids(n);
+  ParallelFor(n, options.threads, [&](size_t i) {
+    global[i] = ToGlobal(d.maps[i]);
+    for (const Point2& p : global[i]) {
+      Box& b = boxes[i];
+      b.x0 = std::min(b.x0, p.x), b.y0 = std::min(b.y0, p.y), b.x1 = std::max(b.x1, p.x), b.y1 = std::max(b.y1, p.y);
+    }
+    grids[i] = PointGrid(global[i], options.place_radius_m);
+  });
+
+  d.queries.resize(pairs.size());
+  const uint64_t base = options.seed * 0x9E3779B97F4A7C15ULL ^ Fnv1a(d.name);
+  ProgressBar bar(d.name + ": ground truth and changes", pairs.size());
+  std::atomic<size_t> done{0};
+  std::mutex bar_mutex;
+  ParallelFor(pairs.size(), options.threads, [&](size_t k) {
+    const RelevantPair& p = pairs[k];
+    EvalQuery& q = d.queries[k];
+    q.map = p.query, q.relevant = p.relevant, q.mean_dist_m = p.mean_dist_m;
+    const LocalMap& qm = d.maps[p.query];
+    const std::vector<Point2>& qg = global[p.query];
+    for (size_t j = 0; j < n; ++j) {
+      if (std::abs(d.maps[j].truth.travel_start - qm.truth.travel_start) <= 10.0) continue;
+      if (d.maps[j].points.empty()) continue;
+      q.candidates.push_back(j);
+      if (!boxes[p.query].Meets(boxes[j], options.place_radius_m)) continue;
+      const size_t need = static_cast<size_t>(std::ceil(options.place_min_overlap * qg.size()));
+      size_t within = 0, seen = 0;
+      for (const Point2& pt : qg) {
+        within += grids[j].AnyWithin(pt, options.place_radius_m) ? 1 : 0;
+        ++seen;
+        if (within + (qg.size() - seen) < need) break;  // cannot reach the threshold
+      }
+      if (!qg.empty() && within >= need) q.places.push_back(j);
+    }
+    q.changed = qm;
+    std::mt19937_64 rng(base ^ (0xD1B54A32D192ED03ULL * (p.query + 1)));
+    Result<SimulatedChange> ch = ApplySimulatedChange(q.changed, rng);
+    if (ch.ok()) {
+      q.change_ok = true;
+      q.changed_points = ch->changed_points;
+    } else {
+      q.changed = qm;
+    }
+    std::lock_guard<std::mutex> lock(bar_mutex);
+    bar.Update(++done);
+  });
+  bar.Done();
+  d.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return d;
+}
+
+}  // namespace lmd::eval

@@ -1,0 +1,56 @@
+// One dataset of the evaluation protocol (DESIGN.md §4), loaded once and
+// shared by every method: local maps, relevant pairs, place truth and the
+// simulated change in each query.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/eval/ground_truth.h"
+#include "core/eval/point_grid.h"
+#include "core/sim/change.h"
+#include "core/status.h"
+#include "core/types.h"
+
+namespace lmd::eval {
+
+// Runs fn(i) for i in [0, n) on `threads` threads (>= 1), dynamic schedule.
+void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
+
+struct EvalQuery {
+  size_t map = 0;                 // index of the query map
+  size_t relevant = 0;            // index of its relevant map (paper's scoring)
+  double mean_dist_m = 0.0;       // ground truth mean distance to it
+  std::vector<size_t> candidates; // valid candidates (> 10 m of travel away), ascending
+  std::vector<size_t> places;     // candidates showing the query's place (overlap >= 0.5), ascending
+  LocalMap changed;               // copy of the query map with a simulated change
+  bool change_ok = false;         // false: no change could be placed (query used unchanged)
+  std::vector<Point2> changed_points;  // own frame of the query
+};
+
+struct Dataset {
+  std::string name;
+  std::vector<LocalMap> maps;
+  std::vector<EvalQuery> queries;  // one per relevant pair, sorted by query map
+  double load_seconds = 0.0;
+
+  // Pose of the query's own frame in map db's own frame (ground truth).
+  Pose2 TruePose(size_t query_map, size_t db_map) const;
+  bool ShowsPlace(const EvalQuery& q, size_t db_map) const;
+};
+
+struct DatasetOptions {
+  uint64_t seed = 1;              // simulated changes: one rng per query from (seed, dataset, query)
+  double place_radius_m = 0.3;    // place truth: query points within this of the map's
+  double place_min_overlap = 0.5; //   ... at least this fraction
+  int threads = 2;
+};
+
+// Reads the log, builds local maps (5 m every 1 m), ground truth, place truth
+// and simulated changes. IoError etc. from the reader.
+Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options);
+
+}  // namespace lmd::eval

@@ -1,0 +1,89 @@
+// lmd-eval retrieval: the methods compared, their per-dataset results, and
+// the writers of results.json, report.md and the SVG plots.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/eval/retrieval_metrics.h"
+#include "core/index/retrieve_options.h"
+#include "core/viewpoint/viewpoint.h"
+
+namespace lmd::eval {
+
+// How the top hits of the first stage are re-ranked after verification.
+enum class Rerank {
+  kOverlap,   // fraction of query points within 0.3 m of the db map after alignment
+  kMeanDist,  // truncated mean distance of the query points after alignment (smaller first)
+};
+
+// One method: a descriptor configuration, a first-stage similarity and an
+// optional geometric verification of its top hits.
+struct MethodSpec {
+  std::string key;    // results.json key
+  std::string label;  // report label
+  std::string group;  // "paper", "descriptor", "best", "ablation"
+  // Descriptor.
+  Planner planner = Planner::kCoG;
+  bool both_planners = false;  // first stage = max of the CoG and CoR kernel scores
+  int setting = 1;             // paper descriptor setting #1..#8
+  double interest_cell_m = 0.5;  // describer interest grid (DescriberOptions default)
+  int max_features = 80;         // describer cap (DescriberOptions default)
+  // First stage.
+  Method method = Method::kLmd;
+  double max_offset_m = 0.5;     // RetrieveOptions::max_offset_m (its default)
+  bool stationary = false;       // queries without simulated change
+  // Verification of the first stage's top hits (0 = none).
+  size_t verify_top_n = 0;
+  Rerank rerank = Rerank::kOverlap;
+  bool global_fallback = true;   // guess-free scan matching when the guided match is poor
+  double verify_window_m = 2.0;
+  // Change detection evaluated on this method's hits.
+  bool change_eval = false;
+  std::string note;              // one line for the ablation table: what differs from best
+};
+
+// Thresholds T_NN-d of the change-detection curves; kDefaultThreshold is the
+// detector's default (1.5), evaluated in addition to the integer curve.
+inline const std::vector<double>& ChangeThresholds() {
+  static const std::vector<double> t = {0, 1, 1.5, 2, 3, 4, 5, 6, 7, 8};
+  return t;
+}
+inline constexpr double kDefaultChangeThreshold = 1.5;
+
+// Change detection results of one dataset (one method).
+struct ChangeResult {
+  size_t tasks = 0;  // queries with a simulated change
+  std::vector<size_t> ks;                   // k of the curves
+  std::map<double, std::vector<double>> curves;  // threshold -> success rate at each k
+  double success_at_1 = 0, success_at_10 = 0;  // default threshold
+  double false_alarm_rate = 0;  // default threshold: top-10 masks not on a true change of a right place
+  double masks_mean = 0;        // default threshold: masks per task
+};
+
+struct DatasetResults {
+  std::string name;
+  size_t maps = 0;
+  size_t queries = 0;
+  std::map<std::string, RetrievalSummary> methods;
+  ChangeResult change;
+  std::string change_method;
+};
+
+struct RunInfo {
+  std::string command;
+  std::string date;
+  std::string machine;
+  uint64_t seed = 1;
+  int threads = 2;
+  double seconds = 0;
+};
+
+// DIR/results.json, DIR/report.md and DIR/*.svg. False if a file cannot be written.
+bool WriteResults(const std::string& dir, const std::vector<MethodSpec>& specs,
+                  const std::vector<DatasetResults>& datasets, const RunInfo& info);
+
+}  // namespace lmd::eval

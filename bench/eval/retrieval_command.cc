@@ -1,0 +1,611 @@
+// lmd-eval retrieval: the paper's experiment on real laser logs (DESIGN.md §4)
+// and the product's pipeline, scored both the paper's way (one relevant map
+// per query: ANR, recall@1, top-X %) and by place recall and pose error.
+//
+// Per dataset: local maps, ground truth, one simulated change per query
+// (seeded), then for every method every query is scored against ALL its
+// valid candidates (exact ranks, no index shortcuts): the LMD kernel
+// (core/index/pyramid_kernel.h, the same code the index scores with) or BoW,
+// optionally followed by geometric verification of the top hits
+// (bench/eval/verify.h -> core/align). Descriptors are computed once per
+// (map, planner, descriptor configuration) and shared between methods.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "bench/eval/args.h"
+#include "bench/eval/commands.h"
+#include "bench/eval/data_paths.h"
+#include "bench/eval/eval_dataset.h"
+#include "bench/eval/retrieval.h"
+#include "bench/eval/verify.h"
+#include "core/align/relative_pose.h"
+#include "core/change/change_detector.h"
+#include "core/describe/describer.h"
+#include "core/index/pyramid_kernel.h"
+#include "core/util/progress_bar.h"
+
+namespace lmd::eval {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// ---------------------------------------------------------------------------
+// Methods.
+
+MethodSpec PaperMethod(const std::string& key, const std::string& label, Planner planner, Method method) {
+  MethodSpec m;
+  m.key = key, m.label = label, m.group = "paper", m.planner = planner, m.method = method;
+  return m;
+}
+
+// The product's default configuration (tuned on orebro, fr101, aces, seed 1;
+// see docs/results.md).
+MethodSpec BestMethod() {
+  MethodSpec m;
+  m.key = "best", m.label = "best (product default)", m.group = "best";
+  m.planner = Planner::kCoG;
+  m.both_planners = true;
+  m.setting = 1;
+  m.max_offset_m = 3.0;
+  m.verify_top_n = 20;
+  m.rerank = Rerank::kMeanDist;
+  m.global_fallback = true;
+  m.change_eval = true;
+  return m;
+}
+
+std::vector<MethodSpec> DefaultMethods(bool ablations) {
+  std::vector<MethodSpec> v;
+  v.push_back(PaperMethod("bow", "BoW", Planner::kCoG, Method::kBow));
+  v.push_back(PaperMethod("lmd_cog", "LMD+CoG", Planner::kCoG, Method::kLmd));
+  v.push_back(PaperMethod("lmd_cor", "LMD+CoR", Planner::kCoR, Method::kLmd));
+  MethodSpec st = PaperMethod("lmd_cor_stationary", "LMD+CoR stationary", Planner::kCoR, Method::kLmd);
+  st.stationary = true;
+  v.push_back(st);
+  for (int s = 1; s <= 8; ++s) {
+    const DescriptorSetting ds = PaperDescriptorSetting(s);
+    MethodSpec d = PaperMethod("desc" + std::to_string(s), "", Planner::kCoG, Method::kLmd);
+    char label[64];
+    std::snprintf(label, sizeof label, "#%d (R=%g, A=%d)", s, ds.radius_m, ds.sectors);
+    d.label = label, d.group = "descriptor", d.setting = s;
+    v.push_back(d);
+  }
+  const MethodSpec best = BestMethod();
+  v.push_back(best);
+  if (!ablations) return v;
+  auto ablation = [&](const std::string& key, const std::string& note) {
+    MethodSpec a = best;
+    a.key = key, a.label = key, a.group = "ablation", a.note = note, a.change_eval = false;
+    return a;
+  };
+  MethodSpec a = ablation("abl_no_verify", "no geometric verification (first stage only)");
+  a.verify_top_n = 0;
+  v.push_back(a);
+  a = ablation("abl_offset_0.5", "max_offset_m = 0.5 (index default) in the first stage");
+  a.max_offset_m = 0.5;
+  v.push_back(a);
+  a = ablation("abl_cog_only", "first stage on CoG frames only (no CoR scores)");
+  a.both_planners = false;
+  v.push_back(a);
+  a = ablation("abl_rerank_overlap", "re-rank by aligned overlap instead of aligned mean distance");
+  a.rerank = Rerank::kOverlap;
+  v.push_back(a);
+  a = ablation("abl_no_global", "no guess-free scan matching fallback");
+  a.global_fallback = false;
+  v.push_back(a);
+  a = ablation("abl_verify_5", "verify the top 5 instead of the top 20");
+  a.verify_top_n = 5;
+  v.push_back(a);
+  return v;
+}
+
+// ---------------------------------------------------------------------------
+// Descriptor cache: one Lmd per (configuration, map) and per (configuration,
+// changed query).
+
+struct DescKey {
+  Planner planner;
+  int setting;
+  double cell;
+  int max_features;
+  bool operator<(const DescKey& o) const {
+    return std::tie(planner, setting, cell, max_features) < std::tie(o.planner, o.setting, o.cell, o.max_features);
+  }
+};
+
+struct DescSet {
+  std::vector<Lmd> db;                         // per map
+  std::vector<std::vector<PoseFeature>> db_pf; // per map, sorted
+  std::vector<double> db_ms;                   // describe time per map
+  std::vector<Lmd> q;                          // per query (changed copy)
+  std::vector<std::vector<PoseFeature>> q_pf;
+  std::vector<double> q_ms;
+};
+
+struct Plans {
+  std::vector<Frame> cog, cor;      // per map
+  std::vector<double> ms;           // planning time per map
+  std::vector<Frame> q_cog, q_cor;  // per query (changed copy)
+  std::vector<double> q_ms;
+  const Frame& Db(Planner p, size_t i) const { return p == Planner::kCoG ? cog[i] : cor[i]; }
+  const Frame& Q(Planner p, size_t i) const { return p == Planner::kCoG ? q_cog[i] : q_cor[i]; }
+};
+
+const IndexOptions kIndexOptions{};
+
+class Describers {
+ public:
+  Describers(const Dataset& d, const Plans& plans, int threads) : d_(d), plans_(plans), threads_(threads) {}
+
+  const DescSet& Get(const DescKey& key) {
+    auto it = cache_.find(key);
+    if (it != cache_.end()) return it->second;
+    DescSet& s = cache_[key];
+    DescriberOptions o;
+    o.setting = PaperDescriptorSetting(key.setting);
+    o.interest_cell_m = key.cell;
+    o.max_features = key.max_features;
+    const size_t n = d_.maps.size(), nq = d_.queries.size();
+    s.db.resize(n), s.db_pf.resize(n), s.db_ms.resize(n);
+    s.q.resize(nq), s.q_pf.resize(nq), s.q_ms.resize(nq);
+    char label[128];
+    std::snprintf(label, sizeof label, "%s: describing (%s, #%d)", d_.name.c_str(), PlannerName(key.planner),
+                  key.setting);
+    ProgressBar bar(label, n + nq);
+    std::mutex mu;
+    size_t done = 0;
+    ParallelFor(n + nq, threads_, [&](size_t k) {
+      const auto t0 = Clock::now();
+      const bool is_q = k >= n;
+      const size_t i = is_q ? k - n : k;
+      const LocalMap& map = is_q ? d_.queries[i].changed : d_.maps[i];
+      const Frame& frame = is_q ? plans_.Q(key.planner, i) : plans_.Db(key.planner, i);
+      Lmd lmd = Describe(map, frame, o);
+      Result<std::vector<PoseFeature>> pf = ToPoseFeatures(lmd, kIndexOptions);
+      std::vector<PoseFeature> f = pf.ok() ? std::move(pf).value() : std::vector<PoseFeature>{};
+      const double ms = MsSince(t0);
+      if (is_q) {
+        s.q[i] = std::move(lmd), s.q_pf[i] = std::move(f), s.q_ms[i] = ms;
+      } else {
+        s.db[i] = std::move(lmd), s.db_pf[i] = std::move(f), s.db_ms[i] = ms;
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      bar.Update(++done);
+    });
+    bar.Done();
+    return s;
+  }
+
+ private:
+  const Dataset& d_;
+  const Plans& plans_;
+  int threads_;
+  std::map<DescKey, DescSet> cache_;
+};
+
+Plans PlanAll(const Dataset& d, int threads) {
+  Plans p;
+  const size_t n = d.maps.size(), nq = d.queries.size();
+  p.cog.resize(n), p.cor.resize(n), p.ms.resize(n);
+  p.q_cog.resize(nq), p.q_cor.resize(nq), p.q_ms.resize(nq);
+  ProgressBar bar(d.name + ": planning viewpoints", n + nq);
+  std::mutex mu;
+  size_t done = 0;
+  ParallelFor(n + nq, threads, [&](size_t k) {
+    const auto t0 = Clock::now();
+    const bool is_q = k >= n;
+    const size_t i = is_q ? k - n : k;
+    const ViewpointPlan plan = PlanViewpointDetailed(is_q ? d.queries[i].changed : d.maps[i]);
+    const double ms = MsSince(t0);
+    if (is_q) {
+      p.q_cog[i] = plan.cog, p.q_cor[i] = plan.cor, p.q_ms[i] = ms;
+    } else {
+      p.cog[i] = plan.cog, p.cor[i] = plan.cor, p.ms[i] = ms;
+    }
+    std::lock_guard<std::mutex> lock(mu);
+    bar.Update(++done);
+  });
+  bar.Done();
+  return p;
+}
+
+// ---------------------------------------------------------------------------
+// Scoring one query.
+
+struct Scored {
+  size_t db = 0;          // map index
+  double score = 0.0;     // first stage
+  double final_score = 0.0;
+  int orientation = 0;
+  Point2 offset;
+  Planner planner = Planner::kCoG;  // frames the orientation/offset refer to
+  bool has_pose = false;
+  Pose2 pose;             // query own frame in db own frame
+  bool verified = false;
+};
+
+struct QueryRun {
+  QueryOutcome outcome;
+  std::vector<Scored> top;  // final order, at most kKeep
+};
+
+constexpr size_t kKeep = 10;
+
+QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans& plans, const DescSet& main,
+                  const DescSet* other, const Verifier* verifier) {
+  const EvalQuery& q = d.queries[qi];
+  QueryRun run;
+  const auto t0 = Clock::now();
+  double prep_ms = 0;
+  RetrieveOptions ro;
+  ro.method = m.method;
+  ro.max_offset_m = m.max_offset_m;
+  // Query descriptors: the changed copy, or the map itself (stationary).
+  auto query_pf = [&](const DescSet& s) -> const std::vector<PoseFeature>& {
+    return m.stationary ? s.db_pf[q.map] : s.q_pf[qi];
+  };
+  auto query_frame = [&](Planner p) -> const Frame& { return m.stationary ? plans.Db(p, q.map) : plans.Q(p, qi); };
+  prep_ms += m.stationary ? plans.ms[q.map] + main.db_ms[q.map] : plans.q_ms[qi] + main.q_ms[qi];
+  if (other) prep_ms += m.stationary ? other->db_ms[q.map] : other->q_ms[qi];
+
+  std::vector<Scored> all(q.candidates.size());
+  KernelScratch scratch;
+  auto score_with = [&](const DescSet& s, Planner planner, bool first) {
+    const PreparedQuery pq = PrepareQuery(query_pf(s), kIndexOptions, ro);
+    for (size_t c = 0; c < q.candidates.size(); ++c) {
+      const size_t j = q.candidates[c];
+      const std::vector<PoseFeature>& db = s.db_pf[j];
+      Scored& sc = all[c];
+      if (first) sc.db = j;
+      if (m.method == Method::kBow) {
+        sc.score = ScoreBowMap(pq, db.data(), db.size());
+        continue;
+      }
+      const KernelScore k = ScoreLmdMap(pq, db.data(), db.size(), &scratch);
+      if (first || k.score > sc.score) {
+        sc.score = k.score, sc.orientation = k.orientation, sc.planner = planner;
+        sc.offset = {k.offset_x * kIndexOptions.pose_quantum_m, k.offset_y * kIndexOptions.pose_quantum_m};
+      }
+    }
+  };
+  score_with(main, m.planner, true);
+  if (other) score_with(*other, m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG, false);
+  for (Scored& s : all) {
+    s.final_score = s.score;
+    if (m.method == Method::kLmd && s.score > 0) {
+      s.has_pose = true;
+      s.pose = RelativePose(query_frame(s.planner), plans.Db(s.planner, s.db), s.orientation, s.offset);
+    }
+  }
+  // Order candidates: score descending, then map index ascending.
+  std::vector<size_t> order(all.size());
+  std::iota(order.begin(), order.end(), 0);
+  auto by_final = [&](size_t a, size_t b) {
+    if (all[a].final_score != all[b].final_score) return all[a].final_score > all[b].final_score;
+    return all[a].db < all[b].db;
+  };
+  const size_t n_verify = std::min(m.verify_top_n, all.size());
+  const size_t n_part = std::min(all.size(), std::max(kKeep, n_verify));
+  std::partial_sort(order.begin(), order.begin() + n_part, order.end(), by_final);
+
+  if (verifier && n_verify > 0) {
+    const LocalMap& qmap = m.stationary ? d.maps[q.map] : q.changed;
+    const auto vq = verifier->Prepare(qmap);
+    for (size_t r = 0; r < n_verify; ++r) {
+      Scored& s = all[order[r]];
+      if (s.score <= 0) break;  // never verify maps the first stage did not score
+      std::vector<Pose2> guesses;
+      if (s.has_pose) guesses.push_back(s.pose);
+      const Alignment a = verifier->Align(*vq, s.db, guesses);
+      s.verified = true, s.has_pose = true, s.pose = a.pose;
+      // Verified maps rank above every unverified one (first-stage scores are in [0, 1]).
+      const double key = m.rerank == Rerank::kOverlap ? a.overlap : 1.0 - a.mean_dist_m / 0.5 + 1e-3 * a.overlap;
+      s.final_score = 2.0 + key;
+    }
+    std::partial_sort(order.begin(), order.begin() + n_part, order.end(), by_final);
+  }
+  run.outcome.ms = prep_ms + MsSince(t0);
+
+  // Paper's scoring: rank of the relevant map among all candidates.
+  std::vector<double> finals(all.size());
+  size_t target = 0;
+  for (size_t c = 0; c < all.size(); ++c) {
+    finals[c] = all[c].final_score;
+    if (all[c].db == q.relevant) target = c;
+  }
+  run.outcome.rank = RankOfTarget(finals, target);
+  run.outcome.candidates = all.size();
+  // Place recall and pose of the top hit.
+  run.outcome.place_counted = !q.places.empty();
+  for (size_t r = 0; r < std::min(kKeep, all.size()); ++r) {
+    const Scored& s = all[order[r]];
+    if (s.final_score <= 0) break;  // unscored maps are not hits
+    run.top.push_back(s);
+    if (run.outcome.first_place_hit < 0 && d.ShowsPlace(q, s.db)) run.outcome.first_place_hit = static_cast<int>(r);
+  }
+  if (!run.top.empty() && run.outcome.first_place_hit == 0 && run.top[0].has_pose) {
+    run.outcome.has_pose = true;
+    PoseError(run.top[0].pose, d.TruePose(q.map, run.top[0].db), &run.outcome.pose_err_m, &run.outcome.pose_err_deg);
+  }
+  return run;
+}
+
+// Orientation and offset (planned frames) that reproduce `pose` (query own
+// frame in db own frame) at the query's planned origin: the change detector
+// predicts positions through them.
+MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t id, double score, size_t rank) {
+  MapHit h;
+  h.map_id = id, h.score = score, h.rank = rank;
+  const double quarter = M_PI / 2;
+  const double o = std::round(std::remainder(pose.theta - df.heading + qf.heading, 2 * M_PI) / quarter);
+  h.orientation = static_cast<int>(((static_cast<long>(o) % 4) + 4) % 4);
+  const Point2 at = TransformPoint(pose, qf.origin);  // query planned origin in db own frame
+  const double dx = at.x - df.origin.x, dy = at.y - df.origin.y;
+  const double c = std::cos(-df.heading), s = std::sin(-df.heading);
+  h.offset = {c * dx - s * dy, s * dx + c * dy};
+  return h;
+}
+
+// First 1-based mask rank at which the task succeeds (0 = never), per threshold.
+void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
+                    Planner planner, std::vector<size_t>* first, size_t* masks_default, size_t* false_default) {
+  const EvalQuery& q = d.queries[qi];
+  std::vector<ChangeCandidate> cands;
+  for (size_t r = 0; r < run.top.size(); ++r) {
+    const Scored& h = run.top[r];
+    ChangeCandidate c;
+    if (h.verified) {
+      c.hit = HitFromPose(plans.Q(planner, qi), plans.Db(planner, h.db), h.pose, h.db, h.final_score, r);
+    } else {
+      c.hit.map_id = h.db, c.hit.score = h.final_score, c.hit.rank = r, c.hit.orientation = h.orientation;
+      c.hit.offset = h.offset;
+    }
+    c.db = &s.db[h.db];
+    cands.push_back(c);
+  }
+  const std::vector<double>& ts = ChangeThresholds();
+  first->assign(ts.size(), 0);
+  for (size_t t = 0; t < ts.size(); ++t) {
+    ChangeDetectorOptions o;
+    o.threshold = ts[t];
+    Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
+    if (!masks.ok()) continue;
+    size_t wrong_top10 = 0;
+    for (size_t r = 0; r < masks->size(); ++r) {
+      const ChangeMask& mk = (*masks)[r];
+      const bool ok = d.ShowsPlace(q, mk.db_map_id) && MaskHitsChange(mk.points, q.changed_points, 0.5);
+      if (ok && (*first)[t] == 0) (*first)[t] = r + 1;
+      if (!ok && r < 10) ++wrong_top10;
+    }
+    if (ts[t] == kDefaultChangeThreshold) {
+      *masks_default = std::min<size_t>(masks->size(), 10);
+      *false_default = wrong_top10;
+    }
+  }
+}
+
+struct RunOptions {
+  int threads = 2;
+  size_t max_queries = 0;  // 0 = all (debug: every n-th query to keep this many)
+};
+
+DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& specs, const RunOptions& ro) {
+  DatasetResults res;
+  res.name = d.name;
+  res.maps = d.maps.size();
+  const Plans plans = PlanAll(d, ro.threads);
+  Describers describers(d, plans, ro.threads);
+  std::vector<size_t> qs;
+  const size_t stride = ro.max_queries && d.queries.size() > ro.max_queries
+                            ? (d.queries.size() + ro.max_queries - 1) / ro.max_queries : 1;
+  for (size_t i = 0; i < d.queries.size(); i += stride) qs.push_back(i);
+  res.queries = qs.size();
+
+  std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, window)
+  for (const MethodSpec& m : specs) {
+    const DescSet& main = describers.Get({m.planner, m.setting, m.interest_cell_m, m.max_features});
+    const DescSet* other = nullptr;
+    if (m.both_planners) {
+      other = &describers.Get({m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG, m.setting,
+                               m.interest_cell_m, m.max_features});
+    }
+    const Verifier* verifier = nullptr;
+    if (m.verify_top_n > 0) {
+      char key[64];
+      std::snprintf(key, sizeof key, "%d/%g", m.global_fallback ? 1 : 0, m.verify_window_m);
+      auto& v = verifiers[key];
+      if (!v) {
+        VerifyConfig vc;
+        vc.global_fallback = m.global_fallback;
+        vc.window_m = m.verify_window_m;
+        v = std::make_unique<Verifier>(&d.maps, vc);
+      }
+      verifier = v.get();
+    }
+    std::vector<QueryOutcome> outcomes(qs.size());
+    std::vector<std::vector<size_t>> first(qs.size());
+    std::vector<size_t> masks(qs.size(), 0), false_alarms(qs.size(), 0);
+    ProgressBar bar(d.name + ": " + m.key, qs.size());
+    std::mutex mu;
+    size_t done = 0;
+    ParallelFor(qs.size(), ro.threads, [&](size_t k) {
+      const size_t qi = qs[k];
+      const QueryRun run = RunQuery(d, qi, m, plans, main, other, verifier);
+      outcomes[k] = run.outcome;
+      if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
+        EvalChangeTask(d, qi, run, main, plans, m.planner, &first[k], &masks[k], &false_alarms[k]);
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      bar.Update(++done);
+    });
+    bar.Done();
+    res.methods[m.key] = Summarize(outcomes);
+    if (m.change_eval && res.change_method.empty()) {
+      res.change_method = m.key;
+      ChangeResult& c = res.change;
+      c.ks = LogSteps(1000);
+      const std::vector<double>& ts = ChangeThresholds();
+      std::vector<std::vector<size_t>> per_t(ts.size());
+      size_t total_masks = 0, total_false = 0;
+      for (size_t k = 0; k < qs.size(); ++k) {
+        if (first[k].empty()) continue;
+        ++c.tasks;
+        for (size_t t = 0; t < ts.size(); ++t) per_t[t].push_back(first[k][t]);
+        total_masks += masks[k], total_false += false_alarms[k];
+      }
+      for (size_t t = 0; t < ts.size(); ++t) {
+        c.curves[ts[t]] = SuccessCurve(per_t[t], c.ks);
+        if (ts[t] == kDefaultChangeThreshold) {
+          const std::vector<double> at = SuccessCurve(per_t[t], {1, 10});
+          c.success_at_1 = at[0], c.success_at_10 = at[1];
+        }
+      }
+      c.false_alarm_rate = total_masks ? static_cast<double>(total_false) / total_masks : 0.0;
+      c.masks_mean = c.tasks ? static_cast<double>(total_masks) / c.tasks : 0.0;
+    }
+  }
+  return res;
+}
+
+std::string Now() {
+  char buf[64];
+  const std::time_t t = std::time(nullptr);
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
+  return buf;
+}
+
+std::string Machine() {
+  std::string cpu = "unknown CPU";
+  if (std::FILE* f = std::fopen("/proc/cpuinfo", "r")) {
+    char line[512];
+    while (std::fgets(line, sizeof line, f)) {
+      std::string s = line;
+      if (s.rfind("model name", 0) == 0) {
+        cpu = s.substr(s.find(':') + 2);
+        if (!cpu.empty() && cpu.back() == '\n') cpu.pop_back();
+        break;
+      }
+    }
+    std::fclose(f);
+  }
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  return cpu + ", " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores online";
+}
+
+}  // namespace
+
+int RunRetrieval(int argc, char** argv) {
+  Args args;
+  if (!args.Parse(argc, argv, 0, {"no-ablations", "paper-only"})) {
+    std::fprintf(stderr, "lmd-eval retrieval: %s\n", args.error().c_str());
+    return 2;
+  }
+  std::vector<std::string> logs = args.GetAll("log");
+  if (logs.empty()) {
+    const std::string dir = DefaultDataDir();
+    if (dir.empty()) {
+      std::fprintf(stderr, "lmd-eval retrieval: no --log given and no ../shared/data folder found (set LMD_DATA_DIR)\n");
+      return 2;
+    }
+    logs = LogsIn(dir);
+  }
+  if (logs.empty()) {
+    std::fprintf(stderr, "lmd-eval retrieval: no logs\n");
+    return 2;
+  }
+  const std::string out_dir = args.Get("out", "out/retrieval");
+  RunOptions ro;
+  DatasetOptions dopt;
+  try {
+    ro.threads = std::stoi(args.Get("threads", "2"));
+    ro.max_queries = std::stoul(args.Get("max-queries", "0"));
+    dopt.seed = std::stoull(args.Get("seed", "1"));
+  } catch (...) {
+    std::fprintf(stderr, "lmd-eval retrieval: --threads, --max-queries and --seed take numbers\n");
+    return 2;
+  }
+  dopt.threads = ro.threads;
+  std::vector<MethodSpec> specs = DefaultMethods(!args.Has("no-ablations"));
+  if (args.Has("methods")) {  // comma-separated keys to keep
+    const std::string keep = "," + args.Get("methods") + ",";
+    std::vector<MethodSpec> kept;
+    for (const MethodSpec& m : specs) {
+      if (keep.find("," + m.key + ",") != std::string::npos) kept.push_back(m);
+    }
+    specs = kept;
+  }
+  // Overrides of the best configuration for tuning runs: --best-offset M,
+  // --best-verify N, --best-rerank overlap|meandist, --best-both 0|1, --best-window M.
+  for (MethodSpec& m : specs) {
+    if (m.group != "best" && m.group != "ablation") continue;
+    if (args.Has("best-offset") && m.key != "abl_offset_0.5") m.max_offset_m = std::stod(args.Get("best-offset"));
+    if (args.Has("best-verify") && m.key != "abl_no_verify" && m.key != "abl_verify_5") {
+      m.verify_top_n = std::stoul(args.Get("best-verify"));
+    }
+    if (args.Has("best-rerank") && m.key != "abl_rerank_overlap") {
+      m.rerank = args.Get("best-rerank") == "overlap" ? Rerank::kOverlap : Rerank::kMeanDist;
+    }
+    if (args.Has("best-both") && m.key != "abl_cog_only") m.both_planners = args.Get("best-both") == "1";
+    if (args.Has("best-window")) m.verify_window_m = std::stod(args.Get("best-window"));
+    if (args.Has("best-planner")) m.planner = args.Get("best-planner") == "cor" ? Planner::kCoR : Planner::kCoG;
+    if (args.Has("best-cell")) m.interest_cell_m = std::stod(args.Get("best-cell"));
+    if (args.Has("best-features")) m.max_features = std::stoi(args.Get("best-features"));
+  }
+
+  RunInfo info;
+  info.command = "lmd-eval retrieval";
+  for (int i = 0; i < argc; ++i) info.command += std::string(" ") + argv[i];
+  info.date = Now();
+  info.machine = Machine();
+  info.seed = dopt.seed;
+  info.threads = ro.threads;
+  const auto start = Clock::now();
+  std::vector<DatasetResults> results;
+  for (const std::string& log : logs) {
+    Result<Dataset> d = LoadDataset(log, dopt);
+    if (!d.ok()) {
+      std::fprintf(stderr, "lmd-eval retrieval: %s\n", d.status().ToString().c_str());
+      return 1;
+    }
+    results.push_back(EvaluateDataset(*d, specs, ro));
+    const DatasetResults& r = results.back();
+    std::fprintf(stderr, "%s: %zu maps, %zu queries\n", r.name.c_str(), r.maps, r.queries);
+    for (const MethodSpec& m : specs) {
+      const RetrievalSummary& s = r.methods.at(m.key);
+      std::fprintf(stderr, "  %-20s ANR %5.1f%%  R@1 %.2f  top1%% %.2f  top10%% %.2f  place@1 %.2f  @5 %.2f  pose %.3f m %.2f deg  %.1f ms\n",
+                   m.key.c_str(), s.anr, s.recall_at_1, s.top1, s.top10, s.place_at_1, s.place_at_5,
+                   s.pose_err_m_median, s.pose_err_deg_median, s.ms_per_query);
+    }
+    if (!r.change_method.empty()) {
+      std::fprintf(stderr, "  change (%s): %zu tasks, success@1 %.2f @10 %.2f, false alarms %.2f\n",
+                   r.change_method.c_str(), r.change.tasks, r.change.success_at_1, r.change.success_at_10,
+                   r.change.false_alarm_rate);
+    }
+  }
+  info.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (!WriteResults(out_dir, specs, results, info)) {
+    std::fprintf(stderr, "lmd-eval retrieval: cannot write into %s\n", out_dir.c_str());
+    return 1;
+  }
+  std::printf("wrote %s/results.json, report.md and plots (%.0f s)\n", out_dir.c_str(), info.seconds);
+  return 0;
+}
+
+}  // namespace lmd::eval
