@@ -67,6 +67,17 @@ Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptio
   return out;
 }
 
+FloorDivider::FloorDivider(int32_t d) : d_(d) {
+  int log2d = 0;
+  while ((int64_t{1} << log2d) < d) ++log2d;
+  constexpr int kBits = 19;  // x + bias < 2^19
+  shift_ = kBits + log2d;
+  magic_ = ((uint64_t{1} << shift_) + static_cast<uint64_t>(d) - 1) / static_cast<uint64_t>(d);
+  bias_cells_ = (1 << 17) / d + 1;
+  bias_ = bias_cells_ * d;
+  limit_ = (1 << 17);
+}
+
 std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, const std::vector<uint32_t>& stop_words) {
   if (stop_words.empty()) return features;
   features.erase(std::remove_if(features.begin(), features.end(),
@@ -95,11 +106,22 @@ PreparedQuery PrepareQuery(std::vector<PoseFeature> query, const IndexOptions& i
   }
   // Floor so that the box is never wider than asked; the bin is at least 1 unit.
   q.max_offset = static_cast<int32_t>(std::floor(options.max_offset_m / index_options.pose_quantum_m + 1e-9));
-  q.offset_bin = std::max<int32_t>(
-      1, static_cast<int32_t>(std::lround(options.offset_bin_m / index_options.pose_quantum_m)));
+  q.offset_bin = std::min<int32_t>(
+      30000, std::max<int32_t>(1, static_cast<int32_t>(std::lround(options.offset_bin_m / index_options.pose_quantum_m))));
   q.cell0 = static_cast<int32_t>(std::lround(index_options.pyramid_cell_m / index_options.pose_quantum_m));
   q.levels = index_options.pyramid_levels;
   q.normalization = options.normalization;
+  q.fine_div = FloorDivider(q.cell0 >> q.levels);
+  q.bin_div = FloorDivider(q.offset_bin);
+  for (int o = 0; o < 4; ++o) {
+    q.order[o].resize(n);
+    for (size_t i = 0; i < n; ++i) q.order[o][i] = static_cast<uint32_t>(i);
+    const auto& rxo = q.rx[o];
+    std::sort(q.order[o].begin(), q.order[o].end(), [&](uint32_t a, uint32_t b) {
+      if (q.features[a].word != q.features[b].word) return q.features[a].word < q.features[b].word;
+      return rxo[a] < rxo[b];
+    });
+  }
   return q;
 }
 
@@ -121,12 +143,12 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
   const int levels = q.levels;
   const size_t nl = static_cast<size_t>(levels) + 1;
   // Level-l cell = finest cell >> (L - l): cells nest, one division per axis.
-  const int32_t fine = q.cell0 >> levels;
   // Db cells of the groups that are not one-to-one, sorted per level (they do
   // not depend on the orientation or the offset).
   s->multi.clear();
   s->cells.clear();
   s->offsets.clear();
+  s->run.clear();
   for (uint32_t g = 0; g < s->groups.size(); ++g) {
     const auto& gr = s->groups[g];
     if (gr.q_end - gr.q_begin == 1 && gr.d_end - gr.d_begin == 1) continue;
@@ -135,42 +157,40 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
       const size_t begin = s->cells.size();
       s->offsets.push_back(static_cast<uint32_t>(begin));
       for (uint32_t j = gr.d_begin; j < gr.d_end; ++j)
-        s->cells.push_back(PackPair(FloorDiv(db[j].x, fine) >> (levels - l), FloorDiv(db[j].y, fine) >> (levels - l)));
+        s->cells.push_back(PackPair(q.fine_div(db[j].x) >> (levels - l), q.fine_div(db[j].y) >> (levels - l)));
       std::sort(s->cells.begin() + static_cast<long>(begin), s->cells.end());
+      // Keep distinct cells, their counts in run.
+      size_t out = begin;
+      for (size_t a = begin; a < s->cells.size();) {
+        size_t b = a + 1;
+        while (b < s->cells.size() && s->cells[b] == s->cells[a]) ++b;
+        s->cells[out] = s->cells[a];
+        if (s->run.size() <= out) s->run.resize(out + 1);
+        s->run[out] = static_cast<uint32_t>(b - a);
+        ++out;
+        a = b;
+      }
+      s->cells.resize(out);
     }
   }
   s->offsets.push_back(static_cast<uint32_t>(s->cells.size()));
-  // run[k] = length of the run of equal cells starting at k (at run starts).
-  s->run.assign(s->cells.size(), 0);
-  for (size_t k = 0; k + 1 < s->offsets.size(); ++k) {
-    for (uint32_t a = s->offsets[k]; a < s->offsets[k + 1];) {
-      uint32_t b = a + 1;
-      while (b < s->offsets[k + 1] && s->cells[b] == s->cells[a]) ++b;
-      s->run[a] = b - a;
-      a = b;
-    }
-  }
   for (int o = 0; o < 4; ++o) {
     const int32_t* rx = q.rx[o].data();
     const int32_t* ry = q.ry[o].data();
     // 1-3: matches in the box, histogram of differences, mode bin, offset.
     s->matches.clear();
+    const uint32_t* order = q.order[o].data();
     for (const auto& g : s->groups) {
-      const bool many = g.d_end - g.d_begin > 8;
-      for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
-        uint32_t j = g.d_begin;
-        if (many) {  // db features of a word are sorted by x: skip to x >= rx - box
-          j = static_cast<uint32_t>(std::lower_bound(db + g.d_begin, db + g.d_end, rx[i] - box,
-                                                     [](const PoseFeature& f, int32_t v) { return f.x < v; }) - db);
-        }
-        for (; j < g.d_end; ++j) {
+      // Query features in increasing rotated x against db features sorted by
+      // x: a window [x - box, x + box] that only moves forward.
+      uint32_t start = g.d_begin;
+      for (uint32_t k = g.q_begin; k < g.q_end; ++k) {
+        const uint32_t i = order[k];
+        while (start < g.d_end && db[start].x < rx[i] - box) ++start;
+        for (uint32_t j = start; j < g.d_end && db[j].x <= rx[i] + box; ++j) {
           const int32_t dx = db[j].x - rx[i], dy = db[j].y - ry[i];
-          if (dx > box) {
-            if (many) break;
-            continue;
-          }
-          if (dx < -box || dy < -box || dy > box) continue;
-          s->matches.push_back({PackPair(FloorDiv(dx, q.offset_bin), FloorDiv(dy, q.offset_bin)), dx, dy});
+          if (dy < -box || dy > box) continue;
+          s->matches.push_back({PackPair(q.bin_div(dx), q.bin_div(dy)), dx, dy});
         }
       }
     }
@@ -197,8 +217,8 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     int inter[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
     for (const auto& g : s->groups) {
       if (g.q_end - g.q_begin != 1 || g.d_end - g.d_begin != 1) continue;
-      const int32_t qx = FloorDiv(rx[g.q_begin] + tx, fine), qy = FloorDiv(ry[g.q_begin] + ty, fine);
-      const int32_t px = FloorDiv(db[g.d_begin].x, fine), py = FloorDiv(db[g.d_begin].y, fine);
+      const int32_t qx = q.fine_div(rx[g.q_begin] + tx), qy = q.fine_div(ry[g.q_begin] + ty);
+      const int32_t px = q.fine_div(db[g.d_begin].x), py = q.fine_div(db[g.d_begin].y);
       for (int l = 0; l <= levels; ++l) {
         const int shift = levels - l;
         if ((qx >> shift) != (px >> shift) || (qy >> shift) != (py >> shift)) break;
@@ -211,7 +231,7 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
     for (size_t k = 0; k < s->multi.size(); ++k) {
       const auto& g = s->groups[s->multi[k]];
       for (uint32_t i = g.q_begin; i < g.q_end; ++i) {
-        const int32_t fx = FloorDiv(rx[i] + tx, fine), fy = FloorDiv(ry[i] + ty, fine);
+        const int32_t fx = q.fine_div(rx[i] + tx), fy = q.fine_div(ry[i] + ty);
         for (int l = 0; l <= levels; ++l) {
           const int64_t* begin = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l)];
           const int64_t* end = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l) + 1];

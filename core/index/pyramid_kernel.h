@@ -57,12 +57,35 @@ std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, con
 // floor(a / b) for b > 0.
 inline int32_t FloorDiv(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
+// floor(x / d) by one multiplication (Granlund-Montgomery round-up method)
+// for |x| < 2^17, falling back to FloorDiv outside; 1 <= d < 2^15.
+class FloorDivider {
+ public:
+  FloorDivider() = default;
+  explicit FloorDivider(int32_t d);
+  int32_t operator()(int32_t x) const {
+    if (x < -bias_ || x >= limit_) return FloorDiv(x, d_);
+    return static_cast<int32_t>((static_cast<uint64_t>(x + bias_) * magic_) >> shift_) - bias_cells_;
+  }
+
+ private:
+  int32_t d_ = 1;
+  uint64_t magic_ = 1;
+  int shift_ = 0;
+  int32_t bias_ = 0, bias_cells_ = 0, limit_ = 0;
+};
+
 // A query prepared once and scored against many maps.
 struct PreparedQuery {
   std::vector<PoseFeature> features;  // sorted by (word, x, y)
   // rotated[o][i] = R(o * 90 deg) * features[i] (x, y), int32.
   std::vector<int32_t> rx[4];
   std::vector<int32_t> ry[4];
+  // order[o] = feature indices sorted by (word, rx[o]): within a word's range
+  // the features in increasing rotated x.
+  std::vector<uint32_t> order[4];
+  FloorDivider fine_div;  // by the finest cell width
+  FloorDivider bin_div;   // by offset_bin
   int32_t max_offset = 0;   // pose units
   int32_t offset_bin = 1;   // pose units
   int32_t cell0 = 1;        // pose units, level-0 cell width
@@ -91,13 +114,13 @@ struct KernelScratch {
   struct Match { int64_t bin; int32_t dx, dy; };
   std::vector<Group> groups;
   std::vector<Match> matches;
-  // Groups with several features on a side: their db cells per level, sorted
-  // (cells[offsets[k * (L + 1) + l] ...]), and how many of each were matched.
+  // Groups with several features on a side: their distinct db cells per level,
+  // sorted (cells[offsets[k * (L + 1) + l] ...]).
   std::vector<uint32_t> multi;
   std::vector<int64_t> cells;
   std::vector<uint32_t> offsets;
-  std::vector<uint32_t> run;   // length of the run of equal cells starting here
-  std::vector<uint32_t> used;  // db features of that run already matched
+  std::vector<uint32_t> run;   // db features in each (distinct) cell
+  std::vector<uint32_t> used;  // how many of them are already matched
 };
 
 // kLmd score of one stored map (pose features sorted by (word, x, y)).

@@ -107,3 +107,18 @@ TEST(PyramidKernelTest, LevelZeroIsOneCellNotTheWholeMap) {
 
 }  // namespace
 }  // namespace lmd
+
+namespace lmd {
+namespace {
+
+TEST(PyramidKernelTest, FloorDividerEqualsFloorDivision) {
+  for (int32_t d : {1, 2, 3, 7, 10, 25, 50, 100, 255, 4096, 29999}) {
+    const FloorDivider div(d);
+    for (int32_t x = -300000; x <= 300000; x += (x > -2000 && x < 2000) ? 1 : 97) {
+      ASSERT_EQ(div(x), static_cast<int32_t>(std::floor(static_cast<double>(x) / d))) << x << " / " << d;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lmd
