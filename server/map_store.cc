@@ -175,7 +175,20 @@ Status MapStore::RebuildIndexes() {
   }
   Status status = FromRocks(it->status(), "reading descriptors");
   if (!status.ok()) return status;
+  // The stored maps themselves, counted by their metadata records.
+  std::map<std::string, uint64_t> stored;
+  std::unique_ptr<rocksdb::Iterator> meta(db_->NewIterator({}, metadata_cf_));
+  for (meta->SeekToFirst(); meta->Valid(); meta->Next()) {
+    const std::string key = meta->key().ToString();
+    ++stored[key.substr(0, key.find('/'))];
+  }
+  status = FromRocks(meta->status(), "reading map metadata");
+  if (!status.ok()) return status;
   for (const auto& [name, state] : collections_) {
+    if (stored[name] != state->record.maps()) {
+      return Status::Corruption("collection '" + name + "' is inconsistent: " + std::to_string(stored[name]) +
+                                " maps stored, " + std::to_string(state->record.maps()) + " counted");
+    }
     if (state->index.size() != state->record.maps() || state->index.PostingCount() != state->record.postings()) {
       return Status::Corruption("collection '" + name + "' is inconsistent: " + std::to_string(state->record.maps()) +
                                 " maps and " + std::to_string(state->record.postings()) + " postings counted, " +

@@ -36,11 +36,7 @@ v1::InsertMapRequest ToInsert(const std::string& collection, const LocalMap& map
 
 // Pose of `query`'s own frame in `db`'s own frame, from the simulator's truth.
 Pose2 TruePose(const LocalMap& query, const LocalMap& db) {
-  const Pose2& q = query.truth.global_frame;
-  const Pose2& d = db.truth.global_frame;
-  const double c = std::cos(-d.theta), s = std::sin(-d.theta);
-  return {c * (q.x - d.x) - s * (q.y - d.y), s * (q.x - d.x) + c * (q.y - d.y),
-          std::remainder(q.theta - d.theta, 2 * M_PI)};
+  return Compose(Inverse(db.truth.global_frame), query.truth.global_frame);
 }
 
 double NearestDistance(const Point2& p, const std::vector<Point2>& points) {

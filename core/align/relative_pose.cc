@@ -23,9 +23,4 @@ Pose2 RelativePose(const Frame& query_frame, const Frame& db_frame, int orientat
   return pose;
 }
 
-Point2 TransformPoint(const Pose2& pose, const Point2& point) {
-  const Point2 rotated = Rotate(pose.theta, point);
-  return {pose.x + rotated.x, pose.y + rotated.y};
-}
-
 }  // namespace lmd

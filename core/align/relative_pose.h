@@ -8,6 +8,7 @@
 // and t = o_d + R(h_d) offset - R(theta) o_q.
 #pragma once
 
+#include "core/localmap/pose_ops.h"  // TransformPoint, Compose, Inverse
 #include "core/types.h"
 
 namespace lmd {
@@ -15,8 +16,5 @@ namespace lmd {
 // Pose (x, y, theta) of the query's own frame in the db map's own frame;
 // theta is wrapped to (-pi, pi].
 Pose2 RelativePose(const Frame& query_frame, const Frame& db_frame, int orientation, const Point2& offset);
-
-// A point of the query's own frame, expressed in the db map's own frame.
-Point2 TransformPoint(const Pose2& pose, const Point2& point);
 
 }  // namespace lmd

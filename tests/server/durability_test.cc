@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <rocksdb/db.h>
 
 #include "tests/server/test_server.h"
 
@@ -166,6 +167,47 @@ TEST(DurabilityTest, UnopenableStoreIsReportedAndLeftAlone) {
   std::string content;
   std::getline(current, content);
   EXPECT_EQ(content, "garbage");  // nothing was "repaired" or deleted
+}
+
+}  // namespace
+}  // namespace lmd::testing
+
+namespace lmd::testing {
+namespace {
+
+// A store whose counters disagree with its maps is refused with the reason,
+// and left as it is.
+TEST(DurabilityTest, InconsistentStoreIsReportedNotRepaired) {
+  TempDir dir;
+  {
+    TestServer server(dir.path());
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+  }
+  {  // Damage the store: remove one map's metadata behind lmdd's back.
+    rocksdb::DB* db = nullptr;
+    std::vector<rocksdb::ColumnFamilyDescriptor> families;
+    std::vector<std::string> names;
+    ASSERT_TRUE(rocksdb::DB::ListColumnFamilies({}, dir.path(), &names).ok());
+    for (const auto& name : names) families.push_back({name, {}});
+    std::vector<rocksdb::ColumnFamilyHandle*> handles;
+    ASSERT_TRUE(rocksdb::DB::Open({}, dir.path(), families, &handles, &db).ok());
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == "metadata") {
+        ASSERT_TRUE(db->Delete({}, handles[i], "site/a").ok());
+      }
+    }
+    for (auto* handle : handles) db->DestroyColumnFamilyHandle(handle);
+    ASSERT_TRUE(db->Close().ok());
+    delete db;
+  }
+  server::ServerConfig config;
+  config.listen = "127.0.0.1:0";
+  config.data_dir = dir.path();
+  auto started = server::LmdServer::Start(config);
+  ASSERT_FALSE(started.ok());
+  EXPECT_NE(started.status().message().find("inconsistent: 0 maps stored, 1 counted"), std::string::npos)
+      << started.status().message();
 }
 
 }  // namespace
