@@ -80,6 +80,8 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "metrics_listen") { config->metrics_listen = value; return Status::Ok(); }
   if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
+  if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
+  if (key == "prepared_map_cache_entries") return SetUnsigned(key, value, &config->prepared_map_cache_entries);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);

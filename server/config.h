@@ -62,6 +62,13 @@ struct ServerConfig {
   // twice (query, then insert); about 1.5 KB each. 0: off.
   uint32_t descriptor_cache_entries = 4096;
 
+  // The default method verifies the index's best `verify_candidates` hits
+  // geometrically (scan matching; 1-8 ms each) and re-ranks them by aligned
+  // overlap. 0: the default method is the index alone (LMD kernel).
+  uint32_t verify_candidates = 10;
+  // Prepared db maps kept for verification (100-200 KB each).
+  uint32_t prepared_map_cache_entries = 500;
+
   // Prometheus text metrics over HTTP at http://HOST:PORT/metrics. Empty: off.
   std::string metrics_listen;
 };

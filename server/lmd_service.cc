@@ -34,7 +34,8 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       store_(store),
       runner_(runner),
       metrics_(metrics),
-      cache_(config.descriptor_cache_entries) {}
+      cache_(config.descriptor_cache_entries),
+      verifier_(store, config.prepared_map_cache_entries) {}
 
 Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());

@@ -11,6 +11,7 @@
 #include "server/call_runner.h"
 #include "server/config.h"
 #include "server/descriptor_cache.h"
+#include "server/hit_verifier.h"
 #include "core/change/change_detector.h"
 #include "server/map_store.h"
 
@@ -58,13 +59,13 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   // A query: validated, described, and retrieved against its collection.
   struct Query {
     Lmd lmd;
-    std::vector<StoreHit> hits;
+    std::vector<VerifiedStoreHit> hits;  // ranked; verified ones carry the scan-matched pose
   };
   Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
                          v1::Method method) const;
   // The wire form of a hit (metadata, and the pose when the method gives one).
-  Result<v1::MapHit> ToWireHit(const std::string& collection, const Query& query, const StoreHit& hit,
-                               const Lmd* db, v1::Method method) const;
+  Result<v1::MapHit> ToWireHit(const std::string& collection, const Query& query, const VerifiedStoreHit& hit,
+                               size_t rank, const Lmd* db, v1::Method method) const;
 
  public:
   double uptime_s() const;
@@ -76,6 +77,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const CallMetrics* const metrics_;
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable DescriptorCache cache_;
+  mutable HitVerifier verifier_;
 };
 
 }  // namespace lmd::server

@@ -1,6 +1,8 @@
 // Retrieve and DetectChanges of LmdServiceImpl: describe the query map the
 // way the store's maps were described, ask the collection's index, and (for
 // changes) run the change detector against each hit's stored descriptor.
+#include <cmath>
+
 #include "core/align/relative_pose.h"
 #include "proto/convert.h"
 #include "server/indexing.h"
@@ -31,6 +33,15 @@ Result<Method> CoreMethod(v1::Method method, Planner indexed_planner) {
   }
 }
 
+// The change detector predicts db positions through a quarter-turn
+// orientation and an offset between planned frames; a scan-matched pose
+// gives both far more precisely than the index's offset bins.
+void AlignFromPose(const Frame& query_frame, const Frame& db_frame, const Pose2& pose, MapHit* hit) {
+  const double turn = std::remainder(pose.theta + query_frame.heading - db_frame.heading, 2 * M_PI);
+  hit->orientation = static_cast<int>(std::lround(turn / (M_PI / 2)) + 4) % 4;
+  hit->offset = ToFrame(db_frame, TransformPoint(pose, query_frame.origin));
+}
+
 }  // namespace
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collection, const v1::LocalMap& map,
@@ -49,27 +60,41 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   Query query;
   query.lmd = Describe(map);
   RetrieveOptions options;
-  options.top_k = top_k == 0 ? kDefaultTopK : top_k;
+  const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
+  const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
+  options.top_k = verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted;
   options.method = *core_method;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options);
   if (!hits.ok()) return hits.status();
-  query.hits = std::move(hits).value();
+  if (verify) {
+    Result<std::vector<VerifiedStoreHit>> verified =
+        verifier_.Verify(collection, FromProto(map), query.lmd, *hits, config_.verify_candidates);
+    if (!verified.ok()) return verified.status();
+    query.hits = std::move(verified).value();
+  } else {
+    for (const StoreHit& hit : *hits) query.hits.push_back({hit, false, hit.hit.score, {}});
+  }
+  if (query.hits.size() > wanted) query.hits.resize(wanted);
   return query;
 }
 
 Result<v1::MapHit> LmdServiceImpl::ToWireHit(const std::string& collection, const Query& query,
-                                             const StoreHit& hit, const Lmd* db, v1::Method method) const {
+                                             const VerifiedStoreHit& hit, size_t rank, const Lmd* db,
+                                             v1::Method method) const {
   v1::MapHit out;
-  out.set_rank(static_cast<uint32_t>(hit.hit.rank + 1));
-  out.set_map_id(hit.map_id);
-  out.set_score(hit.hit.score);
-  out.set_orientation_deg(static_cast<uint32_t>(hit.hit.orientation * 90));
-  out.set_offset_x(hit.hit.offset.x);
-  out.set_offset_y(hit.hit.offset.y);
-  Result<v1::MapMetadata> meta = store_->GetMetadata(collection, hit.map_id);
+  out.set_rank(static_cast<uint32_t>(rank + 1));
+  out.set_map_id(hit.hit.map_id);
+  out.set_score(hit.score);
+  out.set_orientation_deg(static_cast<uint32_t>(hit.hit.hit.orientation * 90));
+  out.set_offset_x(hit.hit.hit.offset.x);
+  out.set_offset_y(hit.hit.hit.offset.y);
+  Result<v1::MapMetadata> meta = store_->GetMetadata(collection, hit.hit.map_id);
   if (meta.ok()) *out.mutable_metadata() = std::move(meta).value();  // absent if deleted meanwhile
-  if (db != nullptr && method != v1::METHOD_BOW) {
-    *out.mutable_pose() = ToProto(RelativePose(query.lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset));
+  if (hit.verified) {
+    *out.mutable_pose() = ToProto(hit.pose);
+  } else if (db != nullptr && method != v1::METHOD_BOW) {
+    *out.mutable_pose() =
+        ToProto(RelativePose(query.lmd.frame, db->frame, hit.hit.hit.orientation, hit.hit.hit.offset));
   }
   return out;
 }
@@ -81,10 +106,11 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method());
     if (!query.ok()) return query.status();
-    for (const StoreHit& hit : query->hits) {
+    for (size_t rank = 0; rank < query->hits.size(); ++rank) {
       if (context->IsCancelled()) return Status::Cancelled("call cancelled");
-      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.map_id);
-      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, hit, db.ok() ? &*db : nullptr,
+      const VerifiedStoreHit& hit = query->hits[rank];
+      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.hit.map_id);
+      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, hit, rank, db.ok() ? &*db : nullptr,
                                           request->method());
       if (!wire.ok()) return wire.status();
       *response->add_hits() = std::move(wire).value();
@@ -104,16 +130,22 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
 
     std::vector<Lmd> dbs;  // descriptors of the hits still stored
-    std::vector<const StoreHit*> kept;
+    std::vector<const VerifiedStoreHit*> kept;
     dbs.reserve(query->hits.size());
-    for (const StoreHit& hit : query->hits) {
-      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.map_id);
+    for (const VerifiedStoreHit& hit : query->hits) {
+      Result<Lmd> db = store_->GetDescriptor(request->collection(), hit.hit.map_id);
       if (!db.ok()) continue;  // deleted since retrieval
       dbs.push_back(std::move(db).value());
       kept.push_back(&hit);
     }
     std::vector<ChangeCandidate> candidates;
-    for (size_t i = 0; i < kept.size(); ++i) candidates.push_back({kept[i]->hit, &dbs[i]});
+    for (size_t i = 0; i < kept.size(); ++i) {
+      MapHit aligned = kept[i]->hit.hit;
+      aligned.rank = i;
+      aligned.score = kept[i]->score;
+      if (kept[i]->verified) AlignFromPose(query->lmd.frame, dbs[i].frame, kept[i]->pose, &aligned);
+      candidates.push_back({aligned, &dbs[i]});
+    }
     ChangeDetectorOptions options;
     if (request->threshold() > 0) options.threshold = request->threshold();
     Result<std::vector<ChangeMask>> masks = lmd::DetectChanges(query->lmd, candidates, options);
@@ -122,7 +154,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     std::vector<size_t> per_hit(kept.size(), 0);
     std::vector<v1::ChangeHit*> wire_hits;
     for (size_t i = 0; i < kept.size(); ++i) {
-      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, *kept[i], &dbs[i], request->method());
+      Result<v1::MapHit> wire = ToWireHit(request->collection(), *query, *kept[i], i, &dbs[i], request->method());
       if (!wire.ok()) return wire.status();
       v1::ChangeHit* change_hit = response->add_hits();
       *change_hit->mutable_hit() = std::move(wire).value();
@@ -131,7 +163,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     uint32_t rank = 0;
     for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r
       size_t i = 0;
-      while (i < kept.size() && kept[i]->hit.map_id != mask.db_map_id) ++i;
+      while (i < kept.size() && kept[i]->hit.hit.map_id != mask.db_map_id) ++i;
       if (i == kept.size()) continue;
       if (request->max_masks_per_hit() > 0 && per_hit[i] >= request->max_masks_per_hit()) continue;
       ++per_hit[i];

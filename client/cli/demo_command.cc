@@ -84,7 +84,7 @@ int DemoCommand(const CommandContext& ctx) {
   std::printf("stored %zu local maps of robot 1 in collection '%s'; robot 2 sends %d new maps with new objects\n\n",
               stored.size(), collection.c_str(), kQueries);
 
-  int right_place = 0, change_found = 0, asked = 0;
+  int right_place = 0, change_found = 0, asked = 0, revisits = 0;
   bool pictured = false;
   for (int n = 0; n < kQueries && !queries.empty(); ++n) {
     LocalMap& query = queries[(n * queries.size()) / kQueries];
@@ -102,14 +102,19 @@ int DemoCommand(const CommandContext& ctx) {
       std::printf("%-10s no hit\n", query.id.c_str());
       continue;
     }
+    // Did robot 1 see this place at all? (the best any stored map can do)
+    double best_overlap = 0.0;
+    for (const LocalMap& map : stored) best_overlap = std::max(best_overlap, PlaceOverlap(query, map));
+    const bool seen = best_overlap >= 0.5;
+    revisits += seen;
     const v1::ChangeHit& top = response.hits(0);
     const LocalMap* db = by_id.count(top.hit().map_id()) ? by_id[top.hit().map_id()] : nullptr;
     const double overlap = db ? PlaceOverlap(query, *db) : 0.0;
     const bool place_ok = overlap >= 0.5;
     right_place += place_ok;
-    std::printf("%-10s top hit %-10s K=%.3f  %s (%.0f %% of its points on the stored map)", query.id.c_str(),
-                top.hit().map_id().c_str(), top.hit().score(), place_ok ? "right place" : "WRONG place",
-                100 * overlap);
+    std::printf("%-10s top hit %-10s score=%.3f  %s (%.0f %% of its points on the hit; best stored map %.0f %%)",
+                query.id.c_str(), top.hit().map_id().c_str(), top.hit().score(),
+                place_ok ? "right place" : seen ? "WRONG place" : "new place", 100 * overlap, 100 * best_overlap);
     if (db && top.hit().has_pose()) {
       const Pose2 truth = TruePose(query, *db);
       const Pose2 got = FromProto(top.hit().pose());
@@ -154,8 +159,9 @@ int DemoCommand(const CommandContext& ctx) {
       pictured = true;
     }
   }
-  std::printf("\nsummary: %d/%d queries localised at the right place by the top hit; "
-              "true change in the top mask for %d/%d\n", right_place, asked, change_found, asked);
+  std::printf("\nsummary: %d/%d queries localised at the right place by the top hit (%d of them show a place "
+              "robot 1 had mapped); true change in the top mask for %d/%d\n",
+              right_place, asked, revisits, change_found, asked);
   return 0;
 }
 

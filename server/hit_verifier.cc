@@ -1,0 +1,62 @@
+#include "server/hit_verifier.h"
+
+#include "core/align/relative_pose.h"
+#include "proto/convert.h"
+
+namespace lmd::server {
+
+Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::string& collection,
+                                                                 const StoreHit& hit) {
+  const std::string key = collection + "/" + std::to_string(hit.hit.map_id);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (const auto it = index_.find(key); it != index_.end()) {
+      entries_.splice(entries_.begin(), entries_, it->second);
+      return it->second->second;
+    }
+  }
+  Result<v1::StoredMap> stored = store_->GetMap(collection, hit.map_id);
+  if (!stored.ok()) return stored.status();
+  auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions()));
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (capacity_ > 0 && index_.count(key) == 0) {
+    entries_.emplace_front(key, prepared);
+    index_[key] = entries_.begin();
+    if (entries_.size() > capacity_) {
+      index_.erase(entries_.back().first);
+      entries_.pop_back();
+    }
+  }
+  return std::shared_ptr<const PreparedMap>(prepared);
+}
+
+Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& collection, const LocalMap& query,
+                                                          const Lmd& query_lmd, const std::vector<StoreHit>& hits,
+                                                          size_t candidates) {
+  candidates = std::min(candidates, hits.size());
+  std::vector<HitCandidate> inputs;
+  for (size_t i = 0; i < candidates; ++i) {
+    const StoreHit& hit = hits[i];
+    HitCandidate candidate;
+    candidate.map_id = i;  // position in `hits`
+    candidate.retrieval_score = hit.hit.score;
+    Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit);
+    if (prepared.ok()) candidate.db = std::move(prepared).value();  // deleted meanwhile: scores 0
+    Result<Lmd> db = store_->GetDescriptor(collection, hit.map_id);
+    if (db.ok()) candidate.guesses = {RelativePose(query_lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset)};
+    inputs.push_back(std::move(candidate));
+  }
+  std::vector<VerifiedStoreHit> out;
+  for (const VerifiedHit& verified : VerifyHits(query, inputs)) {
+    VerifiedStoreHit hit;
+    hit.hit = hits[verified.map_id];
+    hit.verified = verified.verified && verified.score > 0;
+    hit.score = verified.score;
+    hit.pose = verified.match.pose;
+    out.push_back(std::move(hit));
+  }
+  for (size_t i = candidates; i < hits.size(); ++i) out.push_back({hits[i], false, hits[i].hit.score, {}});
+  return out;
+}
+
+}  // namespace lmd::server
