@@ -15,6 +15,7 @@ namespace lmd::bench {
 int RunFillBench(int argc, char** argv) {
   std::string server = "127.0.0.1:50051", collection = "fill", token;
   long maps = 0;
+  long batch_size = 100;
   bool scans = false;
   for (int i = 0; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -28,13 +29,14 @@ int RunFillBench(int argc, char** argv) {
     else if (flag == "--collection") collection = value;
     else if (flag == "--token") token = value;
     else if (flag == "--maps") maps = std::strtol(value.c_str(), nullptr, 10);
+    else if (flag == "--batch") batch_size = std::strtol(value.c_str(), nullptr, 10);
     else {
       std::fprintf(stderr, "lmd-bench fill: unknown flag %s\n", flag.c_str());
       return 2;
     }
   }
-  if (maps <= 0) {
-    std::fprintf(stderr, "lmd-bench fill: --maps must be a positive number\n");
+  if (maps <= 0 || batch_size <= 0) {
+    std::fprintf(stderr, "lmd-bench fill: --maps and --batch must be positive numbers\n");
     return 2;
   }
   client::ClientOptions options;
@@ -72,7 +74,7 @@ int RunFillBench(int argc, char** argv) {
     insert->mutable_metadata()->set_collection(collection);
     insert->mutable_metadata()->set_map_id(map.id);
     *insert->mutable_map() = ToProto(map);
-    return batch.maps_size() < 100 || flush();
+    return batch.maps_size() < batch_size || flush();
   });
   if (!flush()) {
     std::fprintf(stderr, "lmd-bench fill: insert failed: %s\n", error.c_str());
@@ -80,7 +82,8 @@ int RunFillBench(int argc, char** argv) {
   }
   progress.Done();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("stored %ld maps in '%s' in %.1f s (%.0f maps/s)\n", maps, collection.c_str(), seconds, maps / seconds);
+  std::printf("stored %ld maps in '%s' in %.1f s (%.0f maps/s, %.0f calls/s of %ld maps)\n", maps,
+              collection.c_str(), seconds, maps / seconds, maps / seconds / batch_size, batch_size);
   return 0;
 }
 

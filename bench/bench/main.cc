@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
                 "  index --maps N [--queries Q] [--json]   inverted file vs exhaustive scorer on simulated maps\n"
                 "  load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]\n"
                 "                                          simulated robots inserting and detecting changes\n"
-                "  fill --server HOST:PORT --collection C --maps N [--scans]\n"
+                "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
                 "                                          store N simulated maps (scale runs)\n");
     return command.empty() ? 2 : 0;
   }
