@@ -17,7 +17,8 @@ namespace lmd::eval {
 // How the top hits of the first stage are re-ranked after verification.
 enum class Rerank {
   kOverlap,   // fraction of query points within 0.3 m of the db map after alignment
-  kMeanDist,  // truncated mean distance of the query points after alignment (smaller first)
+  kMeanDist,  // maps with consistency >= 0.5 first, then the smallest mean distance after alignment
+  kConsistency,  // overlap - 2 * (query points in db free space) - 4 * (db points in query free space)
 };
 
 // One method: a descriptor configuration, a first-stage similarity and an
@@ -43,6 +44,9 @@ struct MethodSpec {
   double verify_window_m = 2.0;
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
+  // Masks whose points the verified db map explains (a db point within 0.3 m
+  // under the verified pose) are ranked after the unexplained ones.
+  bool change_geometric = false;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

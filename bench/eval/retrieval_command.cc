@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <map>
@@ -61,10 +62,11 @@ MethodSpec BestMethod() {
   m.both_planners = true;
   m.setting = 1;
   m.max_offset_m = 3.0;
-  m.verify_top_n = 20;
+  m.verify_top_n = 10;
   m.rerank = Rerank::kMeanDist;
   m.global_fallback = true;
   m.change_eval = true;
+  m.change_geometric = true;
   return m;
 }
 
@@ -101,14 +103,17 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_cog_only", "first stage on CoG frames only (no CoR scores)");
   a.both_planners = false;
   v.push_back(a);
-  a = ablation("abl_rerank_overlap", "re-rank by aligned overlap instead of aligned mean distance");
+  a = ablation("abl_rerank_overlap", "re-rank by aligned overlap only (no free-space consistency)");
   a.rerank = Rerank::kOverlap;
+  v.push_back(a);
+  a = ablation("abl_rerank_consistency", "re-rank by free-space consistency only (no mean distance)");
+  a.rerank = Rerank::kConsistency;
   v.push_back(a);
   a = ablation("abl_no_global", "no guess-free scan matching fallback");
   a.global_fallback = false;
   v.push_back(a);
-  a = ablation("abl_verify_5", "verify the top 5 instead of the top 20");
-  a.verify_top_n = 5;
+  a = ablation("abl_verify_20", "verify the top 20 instead of the top 10");
+  a.verify_top_n = 20;
   v.push_back(a);
   return v;
 }
@@ -313,8 +318,20 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
       const Alignment a = verifier->Align(*vq, s.db, guesses);
       s.verified = true, s.has_pose = true, s.pose = a.pose;
       // Verified maps rank above every unverified one (first-stage scores are in [0, 1]).
-      const double key = m.rerank == Rerank::kOverlap ? a.overlap : 1.0 - a.mean_dist_m / 0.5 + 1e-3 * a.overlap;
-      s.final_score = 2.0 + key;
+      // kMeanDist: maps that show the place (overlap >= 0.5) first, then the
+      // smallest mean distance (the relevant map's definition).
+      const double consistency = a.overlap - 2.0 * a.conflict - 4.0 * a.reverse_conflict;
+      double key = consistency;
+      if (m.rerank == Rerank::kOverlap) key = a.overlap;
+      if (m.rerank == Rerank::kMeanDist) key = (consistency >= 0.5 ? 1.0 : 0.0) + 1.0 / (1.0 + a.mean_dist_m);
+      s.final_score = 10.0 + key;
+      if (std::getenv("LMD_EVAL_DEBUG2")) {
+        double em, ed;
+        PoseError(a.pose, d.TruePose(q.map, s.db), &em, &ed);
+        std::fprintf(stderr, "q%zu db %zu rel %d place %d: overlap %.2f mean %.2f conflict %.2f rev %.2f pose err %.2f m %.1f deg\n",
+                     qi, s.db, (int)(s.db == q.relevant), (int)d.ShowsPlace(q, s.db), a.overlap, a.mean_dist_m,
+                     a.conflict, a.reverse_conflict, em, ed);
+      }
     }
     std::partial_sort(order.begin(), order.begin() + n_part, order.end(), by_final);
   }
@@ -362,7 +379,8 @@ MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t
 
 // First 1-based mask rank at which the task succeeds (0 = never), per threshold.
 void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
-                    Planner planner, std::vector<size_t>* first, size_t* masks_default, size_t* false_default) {
+                    Planner planner, const Verifier* verifier, std::vector<size_t>* first, size_t* masks_default,
+                    size_t* false_default) {
   const EvalQuery& q = d.queries[qi];
   std::vector<ChangeCandidate> cands;
   for (size_t r = 0; r < run.top.size(); ++r) {
@@ -384,7 +402,36 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     o.threshold = ts[t];
     Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
     if (!masks.ok()) continue;
+    if (verifier) {
+      std::vector<char> explained(masks->size(), 0);
+      for (size_t r = 0; r < masks->size(); ++r) {
+        const ChangeMask& mk = (*masks)[r];
+        for (const Scored& h : run.top) {
+          if (h.db == mk.db_map_id && h.verified) {
+            explained[r] = verifier->Unexplained(h.db, h.pose, mk.points, 0.3) < 0.5;
+            break;
+          }
+        }
+      }
+      std::vector<size_t> idx(masks->size());
+      std::iota(idx.begin(), idx.end(), 0);
+      std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return explained[a] < explained[b]; });
+      std::vector<ChangeMask> sorted;
+      for (size_t i : idx) sorted.push_back((*masks)[i]);
+      *masks = std::move(sorted);
+    }
     size_t wrong_top10 = 0;
+    if (std::getenv("LMD_EVAL_DEBUG") && ts[t] == kDefaultChangeThreshold) {
+      std::fprintf(stderr, "q%zu: %zu masks, %zu changed pts, top hit %zu place %d\n", qi, masks->size(),
+                   q.changed_points.size(), run.top.empty() ? 0 : run.top[0].db,
+                   run.top.empty() ? -1 : (int)d.ShowsPlace(q, run.top[0].db));
+      for (size_t r = 0; r < std::min<size_t>(masks->size(), 6); ++r) {
+        const ChangeMask& mk = (*masks)[r];
+        std::fprintf(stderr, "  mask %zu db %lu place %d hit %d pts %zu score %.2f\n", r, (unsigned long)mk.db_map_id,
+                     (int)d.ShowsPlace(q, mk.db_map_id), (int)MaskHitsChange(mk.points, q.changed_points, 0.5),
+                     mk.points.size(), mk.score);
+      }
+    }
     for (size_t r = 0; r < masks->size(); ++r) {
       const ChangeMask& mk = (*masks)[r];
       const bool ok = d.ShowsPlace(q, mk.db_map_id) && MaskHitsChange(mk.points, q.changed_points, 0.5);
@@ -447,7 +494,8 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       const QueryRun run = RunQuery(d, qi, m, plans, main, other, verifier);
       outcomes[k] = run.outcome;
       if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
-        EvalChangeTask(d, qi, run, main, plans, m.planner, &first[k], &masks[k], &false_alarms[k]);
+        EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr, &first[k],
+                       &masks[k], &false_alarms[k]);
       }
       std::lock_guard<std::mutex> lock(mu);
       bar.Update(++done);
@@ -554,11 +602,12 @@ int RunRetrieval(int argc, char** argv) {
   for (MethodSpec& m : specs) {
     if (m.group != "best" && m.group != "ablation") continue;
     if (args.Has("best-offset") && m.key != "abl_offset_0.5") m.max_offset_m = std::stod(args.Get("best-offset"));
-    if (args.Has("best-verify") && m.key != "abl_no_verify" && m.key != "abl_verify_5") {
+    if (args.Has("best-verify") && m.key != "abl_no_verify" && m.key != "abl_verify_20") {
       m.verify_top_n = std::stoul(args.Get("best-verify"));
     }
-    if (args.Has("best-rerank") && m.key != "abl_rerank_overlap") {
-      m.rerank = args.Get("best-rerank") == "overlap" ? Rerank::kOverlap : Rerank::kMeanDist;
+    if (args.Has("best-rerank") && m.key.rfind("abl_rerank", 0) != 0) {
+      const std::string r = args.Get("best-rerank");
+      m.rerank = r == "overlap" ? Rerank::kOverlap : r == "meandist" ? Rerank::kMeanDist : Rerank::kConsistency;
     }
     if (args.Has("best-both") && m.key != "abl_cog_only") m.both_planners = args.Get("best-both") == "1";
     if (args.Has("best-window")) m.verify_window_m = std::stod(args.Get("best-window"));

@@ -16,7 +16,8 @@ namespace lmd::eval {
 struct VerifyConfig {
   double window_m = 2.0;          // m, translation window around each guess (per axis)
   double window_deg = 10.0;       // deg, rotation window around each guess
-  bool quarter_turns = true;      // also try each guess turned by 90, 180, 270 deg
+  bool quarter_turns = false;     // also try each guess turned by 90, 180, 270 deg (the kernel
+                                  // already chose the best of the 4 orientations)
   bool global_fallback = true;    // guess-free search when the guided match is poor
   double global_below = 0.5;      // overlap under which the guess-free search runs
   double inlier_radius_m = 0.3;   // m, overlap radius
@@ -25,8 +26,10 @@ struct VerifyConfig {
 struct Alignment {
   Pose2 pose;             // query own frame in db own frame
   double overlap = 0.0;   // fraction of query points within inlier_radius_m after alignment
-  double mean_dist_m = 0.5;  // mean of min(distance to nearest db point, 0.5 m) after alignment
+  double mean_dist_m = 0.5;  // mean distance of the query points to their nearest db point after
+                             // alignment (capped at 10 m per point): the ground truth's criterion
   double conflict = 0.0;  // fraction of query points landing in the db map's free space
+  double reverse_conflict = 0.0;  // fraction of db points landing in the query map's free space
 };
 
 class Verifier {
@@ -44,6 +47,11 @@ class Verifier {
   // Aligns the query to db map `db` near `guesses`; thread-safe (db maps are
   // prepared once, on first use).
   Alignment Align(const Query& query, size_t db, const std::vector<Pose2>& guesses) const;
+
+  // Fraction of `points` (query own frame) that, moved by `pose`, are farther
+  // than radius_m from every point of db map `db` AND lie in space the db map
+  // observed as free: evidence of a change (not merely an unobserved area).
+  double Unexplained(size_t db, const Pose2& pose, const std::vector<Point2>& points, double radius_m) const;
 
   // Frees the prepared db maps.
   void Clear();
