@@ -65,11 +65,23 @@ TEST_F(RetrievalServiceTest, ShiftedCopyFindsItsMapWithThePose) {
   EXPECT_GT(response.hits(0).score(), 0.0);
   EXPECT_EQ(response.hits(0).metadata().collection(), "site");
   ASSERT_TRUE(response.hits(0).has_pose());
-  // The query's frame sits at (-3, +1) in the stored map's frame, unrotated
-  // (the planned viewpoints align up to the offset bins).
+  // The query's frame sits at (-3, +1) in the stored map's frame, unrotated;
+  // the default method's scan matcher gets it to centimetres.
+  EXPECT_NEAR(response.hits(0).pose().x(), -3.0, 0.05);
+  EXPECT_NEAR(response.hits(0).pose().y(), 1.0, 0.05);
+  EXPECT_NEAR(std::remainder(response.hits(0).pose().theta(), 2 * M_PI), 0.0, 0.01);
+}
+
+TEST_F(RetrievalServiceTest, PaperMethodPoseComesFromThePlannedFrames) {
+  v1::RetrieveRequest request = Query(CornerMap(3.0, -1.0));
+  request.set_method(ViewpointOptions().planner == Planner::kCoG ? v1::METHOD_LMD_COG : v1::METHOD_LMD_COR);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  ASSERT_GE(response.hits_size(), 1);
+  EXPECT_EQ(response.hits(0).map_id(), "corner");
+  ASSERT_TRUE(response.hits(0).has_pose());  // coarser: offset bins of the index
   EXPECT_NEAR(response.hits(0).pose().x(), -3.0, 0.5);
   EXPECT_NEAR(response.hits(0).pose().y(), 1.0, 0.5);
-  EXPECT_NEAR(std::remainder(response.hits(0).pose().theta(), 2 * M_PI), 0.0, 0.05);
 }
 
 TEST_F(RetrievalServiceTest, BowHasNoPose) {
