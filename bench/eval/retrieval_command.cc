@@ -399,7 +399,7 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
   first->assign(ts.size(), 0);
   for (size_t t = 0; t < ts.size(); ++t) {
     ChangeDetectorOptions o;
-    o.threshold = ts[t];
+    o.threshold = std::max(ts[t], 1e-9);  // T = 0: every feature with r > 0 (the detector needs T > 0)
     Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
     if (!masks.ok()) continue;
     if (verifier) {
