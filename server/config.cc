@@ -83,6 +83,15 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "prepared_map_cache_entries") return SetUnsigned(key, value, &config->prepared_map_cache_entries);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
+  if (key == "default_max_offset_m") {
+    char* end = nullptr;
+    const double parsed = std::strtod(value.c_str(), &end);
+    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 50) {
+      return Status::InvalidArgument(key + " must be a number of metres in (0, 50], got '" + value + "'");
+    }
+    config->default_max_offset_m = parsed;
+    return Status::Ok();
+  }
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
   return Status::InvalidArgument("unknown setting '" + key + "'");

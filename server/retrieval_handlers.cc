@@ -64,6 +64,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
   options.top_k = verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted;
   options.method = *core_method;
+  if (method == v1::METHOD_DEFAULT) options.max_offset_m = config_.default_max_offset_m;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options);
   if (!hits.ok()) return hits.status();
   if (verify) {

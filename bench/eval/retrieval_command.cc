@@ -270,7 +270,7 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
   std::vector<Scored> all(q.candidates.size());
   KernelScratch scratch;
   auto score_with = [&](const DescSet& s, Planner planner, bool first) {
-    const PreparedQuery pq = PrepareQuery(query_pf(s), kIndexOptions, ro);
+    const PreparedLmdQuery pq = PrepareLmdQuery(query_pf(s), kIndexOptions, ro);
     for (size_t c = 0; c < q.candidates.size(); ++c) {
       const size_t j = q.candidates[c];
       const std::vector<PoseFeature>& db = s.db_pf[j];
@@ -325,13 +325,6 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
       if (m.rerank == Rerank::kOverlap) key = a.overlap;
       if (m.rerank == Rerank::kMeanDist) key = (consistency >= 0.5 ? 1.0 : 0.0) + 1.0 / (1.0 + a.mean_dist_m);
       s.final_score = 10.0 + key;
-      if (std::getenv("LMD_EVAL_DEBUG2")) {
-        double em, ed;
-        PoseError(a.pose, d.TruePose(q.map, s.db), &em, &ed);
-        std::fprintf(stderr, "q%zu db %zu rel %d place %d: overlap %.2f mean %.2f conflict %.2f rev %.2f pose err %.2f m %.1f deg\n",
-                     qi, s.db, (int)(s.db == q.relevant), (int)d.ShowsPlace(q, s.db), a.overlap, a.mean_dist_m,
-                     a.conflict, a.reverse_conflict, em, ed);
-      }
     }
     std::partial_sort(order.begin(), order.begin() + n_part, order.end(), by_final);
   }
@@ -421,17 +414,6 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
       *masks = std::move(sorted);
     }
     size_t wrong_top10 = 0;
-    if (std::getenv("LMD_EVAL_DEBUG") && ts[t] == kDefaultChangeThreshold) {
-      std::fprintf(stderr, "q%zu: %zu masks, %zu changed pts, top hit %zu place %d\n", qi, masks->size(),
-                   q.changed_points.size(), run.top.empty() ? 0 : run.top[0].db,
-                   run.top.empty() ? -1 : (int)d.ShowsPlace(q, run.top[0].db));
-      for (size_t r = 0; r < std::min<size_t>(masks->size(), 6); ++r) {
-        const ChangeMask& mk = (*masks)[r];
-        std::fprintf(stderr, "  mask %zu db %lu place %d hit %d pts %zu score %.2f\n", r, (unsigned long)mk.db_map_id,
-                     (int)d.ShowsPlace(q, mk.db_map_id), (int)MaskHitsChange(mk.points, q.changed_points, 0.5),
-                     mk.points.size(), mk.score);
-      }
-    }
     for (size_t r = 0; r < masks->size(); ++r) {
       const ChangeMask& mk = (*masks)[r];
       const bool ok = d.ShowsPlace(q, mk.db_map_id) && MaskHitsChange(mk.points, q.changed_points, 0.5);

@@ -1,8 +1,8 @@
 // Geometric verification for lmd-eval's "best" pipeline: aligns a query
 // map's points to a candidate db map's with the scan matcher of core/align
 // (correlative search + ICP) and reports the metric pose and the overlap.
-// Kept behind this header (pimpl) so that the align headers never meet the
-// index headers in one translation unit.
+// Kept behind this header (pimpl) so that lmd-eval's retrieval code needs no
+// scan-matcher headers.
 #pragma once
 
 #include <cstddef>

@@ -10,7 +10,7 @@ Result<std::vector<MapHit>> RetrieveExhaustive(const Index& index, const Lmd& qu
   if (!st.ok()) return st;
   auto features = ToPoseFeatures(query, index.options());
   if (!features.ok()) return features.status();
-  const PreparedQuery q = PrepareQuery(
+  const PreparedLmdQuery q = PrepareLmdQuery(
       WithoutStopWords(std::move(features).value(), index.StopWords(options.max_word_share)), index.options(), options);
   const double quantum = index.options().pose_quantum_m;
   TopHits top(options.top_k);

@@ -175,13 +175,13 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
   if (!st.ok()) return st;
   auto features = ToPoseFeatures(query, options_);
   if (!features.ok()) return features.status();
-  const PreparedQuery q =
-      PrepareQuery(WithoutStopWords(std::move(features).value(), StopWords(options.max_word_share)), options_, options);
+  const PreparedLmdQuery q =
+      PrepareLmdQuery(WithoutStopWords(std::move(features).value(), StopWords(options.max_word_share)), options_, options);
   if (options.method == Method::kBow) return RetrieveBow(q, options.top_k, stats);
   return RetrieveLmd(q, options.top_k, stats);
 }
 
-std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const {
+std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.counts.size() < slot_id_.size() * 4) sc.counts.resize(slot_id_.size() * 4, 0);
   sc.touched.clear();
@@ -343,7 +343,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedQuery& q, size_t top_k, Ret
   return top.Take();
 }
 
-std::vector<MapHit> Index::RetrieveBow(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const {
+std::vector<MapHit> Index::RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.counts.size() < slot_id_.size()) sc.counts.resize(slot_id_.size(), 0);
   if (sc.word_counts.size() < slot_id_.size()) sc.word_counts.resize(slot_id_.size(), 0);

@@ -104,8 +104,8 @@ class Index {
 
  private:
   explicit Index(const IndexOptions& options);
-  std::vector<MapHit> RetrieveLmd(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
-  std::vector<MapHit> RetrieveBow(const PreparedQuery& q, size_t top_k, RetrieveStats* stats) const;
+  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
+  std::vector<MapHit> RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
 
   static constexpr uint32_t kMaxMaps = (1u << 24) - 1;  // slots fit 24 bits
   struct Posting {

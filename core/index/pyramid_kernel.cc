@@ -22,7 +22,7 @@ int64_t PackPair(int32_t a, int32_t b) {
 }
 
 // Pairs the query and db features that share an appearance word.
-void GroupSharedWords(const PreparedQuery& q, const PoseFeature* db, size_t nd,
+void GroupSharedWords(const PreparedLmdQuery& q, const PoseFeature* db, size_t nd,
                       std::vector<KernelScratch::Group>* groups) {
   groups->clear();
   const PoseFeature* qf = q.features.data();
@@ -88,9 +88,9 @@ std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, con
   return features;
 }
 
-PreparedQuery PrepareQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
+PreparedLmdQuery PrepareLmdQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
                            const RetrieveOptions& options) {
-  PreparedQuery q;
+  PreparedLmdQuery q;
   q.features = std::move(query);
   const size_t n = q.features.size();
   for (int o = 0; o < 4; ++o) {
@@ -135,7 +135,7 @@ double NormalizeScore(double raw, size_t nq, size_t nd, Normalization normalizat
   return raw;
 }
 
-KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd, KernelScratch* s) {
+KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t nd, KernelScratch* s) {
   KernelScore best;
   GroupSharedWords(q, db, nd, &s->groups);
   if (s->groups.empty()) return best;
@@ -254,7 +254,7 @@ KernelScore ScoreLmdMap(const PreparedQuery& q, const PoseFeature* db, size_t nd
   return best;
 }
 
-double ScoreBowMap(const PreparedQuery& q, const PoseFeature* db, size_t nd) {
+double ScoreBowMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t nd) {
   const PoseFeature* qf = q.features.data();
   const size_t nq = q.features.size();
   size_t i = 0, j = 0;

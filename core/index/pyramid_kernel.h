@@ -76,7 +76,7 @@ class FloorDivider {
 };
 
 // A query prepared once and scored against many maps.
-struct PreparedQuery {
+struct PreparedLmdQuery {
   std::vector<PoseFeature> features;  // sorted by (word, x, y)
   // rotated[o][i] = R(o * 90 deg) * features[i] (x, y), int32.
   std::vector<int32_t> rx[4];
@@ -94,7 +94,7 @@ struct PreparedQuery {
 };
 
 // Prepares `query` (pose features sorted as ToPoseFeatures returns them).
-PreparedQuery PrepareQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
+PreparedLmdQuery PrepareLmdQuery(std::vector<PoseFeature> query, const IndexOptions& index_options,
                            const RetrieveOptions& options);
 
 // raw / norm(nq, nd); 0 when either map is empty. The same expression is used
@@ -124,10 +124,10 @@ struct KernelScratch {
 };
 
 // kLmd score of one stored map (pose features sorted by (word, x, y)).
-KernelScore ScoreLmdMap(const PreparedQuery& query, const PoseFeature* db, size_t db_size,
+KernelScore ScoreLmdMap(const PreparedLmdQuery& query, const PoseFeature* db, size_t db_size,
                         KernelScratch* scratch);
 
 // kBow score: sum over words of min(query count, db count), normalised.
-double ScoreBowMap(const PreparedQuery& query, const PoseFeature* db, size_t db_size);
+double ScoreBowMap(const PreparedLmdQuery& query, const PoseFeature* db, size_t db_size);
 
 }  // namespace lmd

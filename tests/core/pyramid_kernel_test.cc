@@ -18,7 +18,7 @@ using testing::TransformedCopy;
 int64_t Floor(int64_t a, int64_t b) { return static_cast<int64_t>(std::floor(static_cast<double>(a) / b)); }
 
 // The kernel's definition (pyramid_kernel.h), written as plainly as possible.
-KernelScore Reference(const PreparedQuery& q, const std::vector<PoseFeature>& db) {
+KernelScore Reference(const PreparedLmdQuery& q, const std::vector<PoseFeature>& db) {
   KernelScore best;
   for (int o = 0; o < 4; ++o) {
     std::map<std::pair<int64_t, int64_t>, std::vector<std::pair<int64_t, int64_t>>> bins;
@@ -73,7 +73,7 @@ TEST(PyramidKernelTest, MatchesItsDefinitionOnRandomMaps) {
     RetrieveOptions ro;
     ro.max_offset_m = trial % 5 == 0 ? 2.0 : 0.5;
     ro.offset_bin_m = trial % 7 == 0 ? 0.25 : 0.5;
-    const PreparedQuery q = PrepareQuery(*ToPoseFeatures(query, io), io, ro);
+    const PreparedLmdQuery q = PrepareLmdQuery(*ToPoseFeatures(query, io), io, ro);
     const std::vector<PoseFeature> d = *ToPoseFeatures(db, io);
     const KernelScore got = ScoreLmdMap(q, d.data(), d.size(), &scratch);
     const KernelScore want = Reference(q, d);
@@ -97,7 +97,7 @@ TEST(PyramidKernelTest, LevelZeroIsOneCellNotTheWholeMap) {
   query.features = {{7, 1.0f, 1.0f, 0}, {9, 0.2f, 0.2f, 0}};
   near_db.features = {{7, 3.0f, 1.0f, 0}, {9, 0.2f, 0.2f, 0}};  // word 9 anchors offset 0
   far_db.features = {{7, 7.0f, 1.0f, 0}, {9, 0.2f, 0.2f, 0}};
-  const PreparedQuery q = PrepareQuery(*ToPoseFeatures(query, io), io, ro);
+  const PreparedLmdQuery q = PrepareLmdQuery(*ToPoseFeatures(query, io), io, ro);
   const auto near = *ToPoseFeatures(near_db, io);
   const auto far = *ToPoseFeatures(far_db, io);
   // Word 9 matches at all levels (raw 1); word 7 adds I^0/4 only when near.
