@@ -18,6 +18,7 @@ struct RetrieveScratch {
   std::vector<uint32_t> touched;
   std::vector<uint32_t> word_touched;
   std::vector<uint32_t> word_counts;
+  std::vector<uint32_t> word_gains;  // kLmd: 4 per slot, one query word's term gains
   std::vector<uint64_t> keys;
   KernelScratch kernel;
 };
@@ -184,8 +185,12 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
 std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.counts.size() < slot_id_.size() * 4) sc.counts.resize(slot_id_.size() * 4, 0);
+  if (sc.word_gains.size() < slot_id_.size() * 4) sc.word_gains.resize(slot_id_.size() * 4, 0);
+  if (sc.word_counts.size() < slot_id_.size()) sc.word_counts.resize(slot_id_.size(), 0);
   sc.touched.clear();
   uint32_t* counts = sc.counts.data();
+  uint32_t* word_gains = sc.word_gains.data();
+  uint32_t* word_db = sc.word_counts.data();
   const int32_t box = q.max_offset;
   const int levels = q.levels;
   const size_t nq = q.features.size();
@@ -207,7 +212,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   std::vector<uint64_t> level_masks;
   std::vector<uint32_t> table;
   // Pass 1, per distinct query word: read each posting list that can matter
-  // once; per map and term, add the gain of the finest level met.
+  // once; per map and term, add the gain of the finest level met. A term
+  // whose box spans several level-0 cells is counted in each of them, and a
+  // word's db features can be matched once each, so a map's gain from one
+  // word is capped at gain[L] * min(query features, db features read) of
+  // that word (I^l of the word is at most that minimum).
   for (size_t i = 0; i < nq;) {
     const uint32_t word = q.features[i].word;
     size_t e = i + 1;
@@ -232,7 +241,9 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
         terms.push_back(t);
       }
     }
+    const uint32_t query_count = static_cast<uint32_t>(e - i);
     i = e;
+    sc.word_touched.clear();
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     for (uint64_t key : keys) {
@@ -275,8 +286,9 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
         const uint32_t slot = list[r].slot();
         size_t re = r + 1;
         while (re < list.size() && list[re].slot() == slot) ++re;  // a map's postings are adjacent
-        uint32_t* c = counts + 4 * static_cast<size_t>(slot);
-        if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(slot);
+        uint32_t* c = word_gains + 4 * static_cast<size_t>(slot);
+        if (word_db[slot] == 0) sc.word_touched.push_back(slot);
+        word_db[slot] += static_cast<uint32_t>(re - r);
         if (re == r + 1) {
           const uint32_t* g = &table[static_cast<size_t>(sub_of(list[r])) * 4];
           c[0] += g[0];
@@ -298,6 +310,15 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
         }
         r = re;
       }
+    }
+    for (uint32_t slot : sc.word_touched) {
+      uint32_t* g = word_gains + 4 * static_cast<size_t>(slot);
+      uint32_t* c = counts + 4 * static_cast<size_t>(slot);
+      if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(slot);
+      const uint32_t cap = gain[levels] * std::min(query_count, word_db[slot]);
+      for (int o = 0; o < 4; ++o) c[o] += std::min(g[o], cap);
+      g[0] = g[1] = g[2] = g[3] = 0;
+      word_db[slot] = 0;
     }
   }
   // Upper bound of each touched map's score (see index.h), counters reset.
