@@ -16,7 +16,7 @@ namespace lmd::server {
 
 struct IndexingConfig {
   ViewpointOptions viewpoint;  // planner: the product default
-  DescriberOptions describer;  // paper setting #1, 10-bit words
+  DescriberOptions describer = ProductDescriberOptions();  // paper setting #6, 13-bit words
   IndexOptions index;          // W = 5 m, L = 2
 };
 

@@ -1,13 +1,14 @@
 // lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]
 //                 [--top-k K] [--max-offset M] [--method lmd|bow]
-//                 [--max-word-share F] [--cache FILE]
+//                 [--max-word-share F] [--setting S] [--bits B] [--cache FILE]
 // Builds an index of N simulated local maps (simulator -> planner ->
 // describer), runs Q queries through the inverted file and the exhaustive
 // scorer in the same process, and reports p50 latencies, their ratio, whether
 // every top-K agreed (ids, scores, orientations, offsets, ranks) and bytes per
 // stored map (encoded Lmd + posting records). With --json the last stdout line
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
-// "bytes_per_map": z}. Progress goes to stderr. --cache FILE keeps the
+// "bytes_per_map": z}. --setting and --bits choose the descriptor (default:
+// the product's, ProductDescriberOptions: #6 with 13-bit words). Progress goes to stderr. --cache FILE keeps the
 // described maps and queries (encoded Lmds) so that runs with other retrieval
 // options skip the simulator and the describer (reused only if N, Q and the
 // seed match).
@@ -42,6 +43,8 @@ struct Args {
   bool json = false;
   uint64_t seed = 1;
   int threads = 0;
+  int setting = 6;  // the paper's descriptor setting #1..#8 (product default: #6)
+  int bits = 13;    // appearance word bits B (product default: 13)
   std::string cache;
   RetrieveOptions retrieve;
 };
@@ -50,7 +53,7 @@ void Usage() {
   std::fprintf(stderr,
                "usage: lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]\n"
                "                       [--top-k K] [--max-offset M] [--method lmd|bow]\n"
-               "                       [--max-word-share F] [--cache FILE]\n");
+               "                       [--max-word-share F] [--setting 1..8] [--bits B] [--cache FILE]\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
@@ -98,6 +101,12 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--max-word-share") {
       if (!number("--max-word-share", 1e-6, 1, &x)) return false;
       args->retrieve.max_word_share = x;
+    } else if (a == "--setting") {
+      if (!number("--setting", 1, 8, &x)) return false;
+      args->setting = static_cast<int>(x);
+    } else if (a == "--bits") {
+      if (!number("--bits", 1, 16, &x)) return false;
+      args->bits = static_cast<int>(x);
     } else if (a == "--cache") {
       const char* v = value("--cache");
       if (v == nullptr) return false;
@@ -125,7 +134,7 @@ bool ParseArgs(int argc, char** argv, Args* args) {
   return true;
 }
 
-// Cache file: "lmdbench1" N Q seed, then per map / query a u32 length and
+// Cache file: "lmdbench2" N Q seed setting bits, then per map / query a u32 length and
 // EncodeLmd bytes, then the query sources (u64). Native byte order.
 void PutU64(std::ofstream& out, uint64_t v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); }
 bool GetU64(std::ifstream& in, uint64_t* v) { return static_cast<bool>(in.read(reinterpret_cast<char*>(v), sizeof(*v))); }
@@ -134,9 +143,10 @@ bool LoadCache(const std::string& path, const Args& args, SimDescriptors* data) 
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   char magic[9] = {};
-  uint64_t n = 0, q = 0, seed = 0;
-  if (!in.read(magic, 9) || std::memcmp(magic, "lmdbench1", 9) != 0 || !GetU64(in, &n) || !GetU64(in, &q) ||
-      !GetU64(in, &seed) || n != args.maps || q != args.queries || seed != args.seed)
+  uint64_t n = 0, q = 0, seed = 0, setting = 0, bits = 0;
+  if (!in.read(magic, 9) || std::memcmp(magic, "lmdbench2", 9) != 0 || !GetU64(in, &n) || !GetU64(in, &q) ||
+      !GetU64(in, &seed) || !GetU64(in, &setting) || !GetU64(in, &bits) || n != args.maps || q != args.queries || seed != args.seed ||
+      setting != static_cast<uint64_t>(args.setting) || bits != static_cast<uint64_t>(args.bits))
     return false;
   auto read_lmds = [&](uint64_t count, std::vector<Lmd>* out) {
     for (uint64_t k = 0; k < count; ++k) {
@@ -164,10 +174,12 @@ bool LoadCache(const std::string& path, const Args& args, SimDescriptors* data) 
 
 void SaveCache(const std::string& path, const Args& args, const SimDescriptors& data) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write("lmdbench1", 9);
+  out.write("lmdbench2", 9);
   PutU64(out, args.maps);
   PutU64(out, args.queries);
   PutU64(out, args.seed);
+  PutU64(out, static_cast<uint64_t>(args.setting));
+  PutU64(out, static_cast<uint64_t>(args.bits));
   for (const std::vector<Lmd>* set : {&data.maps, &data.queries}) {
     PutU64(out, set->size());
     for (const Lmd& lmd : *set) {
@@ -221,6 +233,8 @@ int RunIndexBench(int argc, char** argv) {
   sim.queries = args.queries;
   sim.seed = args.seed;
   sim.threads = args.threads;
+  sim.describer.setting = PaperDescriptorSetting(args.setting);
+  sim.describer.word_bits = args.bits;
   SimDescriptors data;
   const bool cached = !args.cache.empty() && LoadCache(args.cache, args, &data);
   if (cached) {
@@ -318,8 +332,9 @@ int RunIndexBench(int argc, char** argv) {
   const bool all_agree = agree == data.queries.size();
   const double bytes_per_map = static_cast<double>(lmd_bytes + posting_bytes) / nmaps;
 
-  std::printf("lmd-bench index: %zu maps (seed %llu), %zu queries, top-%zu, method %s, max offset %.2f m\n",
-              data.maps.size(), static_cast<unsigned long long>(args.seed), data.queries.size(),
+  std::printf("lmd-bench index: %zu maps (seed %llu), descriptor #%d, %d-bit words, %zu queries, top-%zu, method %s, "
+              "max offset %.2f m\n",
+              data.maps.size(), static_cast<unsigned long long>(args.seed), args.setting, args.bits, data.queries.size(),
               args.retrieve.top_k, args.retrieve.method == Method::kLmd ? "lmd" : "bow",
               args.retrieve.max_offset_m);
   if (cached) {

@@ -16,8 +16,6 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-Lmd DescribeMap(const LocalMap& map) { return Describe(map, PlanViewpoint(map)); }
-
 // The map seen again from a moved own frame, with noise and dropped points.
 LocalMap Reobserve(const LocalMap& map, uint64_t seed, double noise_m, double drop) {
   std::mt19937_64 rng(seed);
@@ -49,13 +47,14 @@ LocalMap Reobserve(const LocalMap& map, uint64_t seed, double noise_m, double dr
 }
 
 // Describes maps[i] into out[i] on `threads` threads.
-void DescribeBatch(const std::vector<LocalMap>& maps, std::vector<Lmd>* out, int threads) {
+void DescribeBatch(const std::vector<LocalMap>& maps, const DescriberOptions& describer, std::vector<Lmd>* out,
+                   int threads) {
   out->resize(maps.size());
   std::vector<std::thread> workers;
   for (int t = 0; t < threads; ++t) {
     workers.emplace_back([&, t] {
       for (size_t i = static_cast<size_t>(t); i < maps.size(); i += static_cast<size_t>(threads))
-        (*out)[i] = DescribeMap(maps[i]);
+        (*out)[i] = Describe(maps[i], PlanViewpoint(maps[i]), describer);
     });
   }
   for (auto& w : workers) w.join();
@@ -83,7 +82,7 @@ SimDescriptors SimulateDescriptors(const SimDescriptorOptions& options,
   std::vector<Lmd> described;
   auto flush = [&] {
     const auto start = std::chrono::steady_clock::now();
-    DescribeBatch(batch, &described, threads);
+    DescribeBatch(batch, options.describer, &described, threads);
     result.describe_s += Seconds(start);
     for (Lmd& lmd : described) result.maps.push_back(std::move(lmd));
     batch.clear();
@@ -109,7 +108,7 @@ SimDescriptors SimulateDescriptors(const SimDescriptorOptions& options,
   if (!batch.empty()) flush();
   result.simulate_s = Seconds(sim_start) - in_sink_s;
   const auto start = std::chrono::steady_clock::now();
-  DescribeBatch(query_maps, &result.queries, threads);
+  DescribeBatch(query_maps, options.describer, &result.queries, threads);
   result.describe_s += Seconds(start);
   return result;
 }

@@ -8,6 +8,7 @@
 #include <functional>
 #include <vector>
 
+#include "core/describe/describer.h"
 #include "core/types.h"
 
 namespace lmd::bench {
@@ -19,6 +20,7 @@ struct SimDescriptorOptions {
   int threads = 2;        // describer threads
   double query_noise_m = 0.02;   // m, point noise of a query
   double query_drop = 0.1;       // fraction of a query's points dropped
+  DescriberOptions describer;    // descriptor of maps and queries
 };
 
 struct SimDescriptors {

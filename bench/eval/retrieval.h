@@ -31,6 +31,7 @@ struct MethodSpec {
   Planner planner = Planner::kCoG;
   bool both_planners = false;  // first stage = max of the CoG and CoR kernel scores
   int setting = 1;             // paper descriptor setting #1..#8
+  int word_bits = 10;          // appearance word bits B (paper: 10)
   double interest_cell_m = 0.5;  // describer interest grid (DescriberOptions default)
   int max_features = 80;         // describer cap (DescriberOptions default)
   // First stage.

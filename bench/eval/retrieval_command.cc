@@ -60,7 +60,12 @@ MethodSpec BestMethod() {
   m.key = "best", m.label = "best (product default)", m.group = "best";
   m.planner = Planner::kCoG;
   m.both_planners = true;
-  m.setting = 1;
+  const DescriberOptions product = ProductDescriberOptions();
+  for (int s = 1; s <= 8; ++s) {
+    const DescriptorSetting ds = PaperDescriptorSetting(s);
+    if (ds.radius_m == product.setting.radius_m && ds.sectors == product.setting.sectors) m.setting = s;
+  }
+  m.word_bits = product.word_bits;
   m.max_offset_m = 3.0;
   m.verify_top_n = 10;
   m.rerank = Rerank::kMeanDist;
@@ -115,6 +120,9 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 10");
   a.verify_top_n = 20;
   v.push_back(a);
+  a = ablation("abl_desc1_10bit", "descriptor #1 (R=1, A=1) with 10-bit words (the paper's) instead of #6 with 13");
+  a.setting = 1, a.word_bits = 10;
+  v.push_back(a);
   return v;
 }
 
@@ -125,10 +133,12 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
 struct DescKey {
   Planner planner;
   int setting;
+  int word_bits;
   double cell;
   int max_features;
   bool operator<(const DescKey& o) const {
-    return std::tie(planner, setting, cell, max_features) < std::tie(o.planner, o.setting, o.cell, o.max_features);
+    return std::tie(planner, setting, word_bits, cell, max_features) <
+           std::tie(o.planner, o.setting, o.word_bits, o.cell, o.max_features);
   }
 };
 
@@ -162,14 +172,15 @@ class Describers {
     DescSet& s = cache_[key];
     DescriberOptions o;
     o.setting = PaperDescriptorSetting(key.setting);
+    o.word_bits = key.word_bits;
     o.interest_cell_m = key.cell;
     o.max_features = key.max_features;
     const size_t n = d_.maps.size(), nq = d_.queries.size();
     s.db.resize(n), s.db_pf.resize(n), s.db_ms.resize(n);
     s.q.resize(nq), s.q_pf.resize(nq), s.q_ms.resize(nq);
     char label[128];
-    std::snprintf(label, sizeof label, "%s: describing (%s, #%d)", d_.name.c_str(), PlannerName(key.planner),
-                  key.setting);
+    std::snprintf(label, sizeof label, "%s: describing (%s, #%d, %d bits)", d_.name.c_str(),
+                  PlannerName(key.planner), key.setting, key.word_bits);
     ProgressBar bar(label, n + nq);
     std::mutex mu;
     size_t done = 0;
@@ -446,11 +457,11 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
 
   std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, window)
   for (const MethodSpec& m : specs) {
-    const DescSet& main = describers.Get({m.planner, m.setting, m.interest_cell_m, m.max_features});
+    const DescSet& main = describers.Get({m.planner, m.setting, m.word_bits, m.interest_cell_m, m.max_features});
     const DescSet* other = nullptr;
     if (m.both_planners) {
       other = &describers.Get({m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG, m.setting,
-                               m.interest_cell_m, m.max_features});
+                               m.word_bits, m.interest_cell_m, m.max_features});
     }
     const Verifier* verifier = nullptr;
     if (m.verify_top_n > 0) {

@@ -202,6 +202,13 @@ DescriptorSetting PaperDescriptorSetting(int number) {
   return number >= 1 && number <= 8 ? kSettings[number - 1] : kSettings[0];
 }
 
+DescriberOptions ProductDescriberOptions() {
+  DescriberOptions options;
+  options.setting = PaperDescriptorSetting(6);
+  options.word_bits = 13;
+  return options;
+}
+
 Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& options) {
   Lmd lmd;
   lmd.frame = frame;
