@@ -8,8 +8,8 @@
 // features of the same word in the same level-0 cell as the shifted query
 // feature, and the shift is at most max_offset per axis, so for orientation o
 // a query feature can only gain from the lists keyed (its word, a level-0
-// cell meeting the box R(o) q +- max_offset). With B = 10 bits there are only
-// 1024 words, so word-only lists would hold ~every map; the pose cell lets a
+// cell meeting the box R(o) q +- max_offset). With the paper's B = 10 bits there
+// are only 1024 words, so word-only lists would hold ~every map; the pose cell lets a
 // query skip the lists of cells its features cannot reach. How much that and
 // the bound below save depends on the data: features spread over many cells
 // and evenly used words prune well; features packed near the planned origin
@@ -23,7 +23,11 @@
 // w_0 + ... + w_l where l is the finest level at which a same-word posting of
 // the map lies in a cell meeting the box (I^l counts a query feature at most
 // once, and only if such a posting exists, because the shifted feature stays
-// in the box). The bound is min(that, min(|q|, |d|)), normalised like K.
+// in the box). A word's share of that sum is capped at
+// (w_0 + ... + w_L) * min(query features, db features in the lists read) of
+// the word, since I^l of one word cannot exceed that minimum (without the cap
+// a box spanning several level-0 cells counted its feature in each). The
+// bound is min(that, min(|q|, |d|)), normalised like K.
 // Pass 2 scores maps exactly, best bound first, with the same ScoreLmdMap as
 // the exhaustive scorer, until the next bound is below the k-th best score.
 // Scores, orientations, offsets and ranks are therefore identical to
