@@ -6,7 +6,7 @@
 namespace lmd::server {
 
 Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::string& collection,
-                                                                 const StoreHit& hit) {
+                                                                 const StoreHit& hit, double heading) {
   const std::string key = collection + "/" + std::to_string(hit.hit.map_id);
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -17,7 +17,7 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
   }
   Result<v1::StoredMap> stored = store_->GetMap(collection, hit.map_id);
   if (!stored.ok()) return stored.status();
-  auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions()));
+  auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions(), heading));
   std::lock_guard<std::mutex> lock(mutex_);
   if (capacity_ > 0 && index_.count(key) == 0) {
     entries_.emplace_front(key, prepared);
@@ -40,14 +40,24 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
     HitCandidate candidate;
     candidate.map_id = i;  // position in `hits`
     candidate.retrieval_score = hit.hit.score;
-    Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit);
-    if (prepared.ok()) candidate.db = std::move(prepared).value();  // deleted meanwhile: scores 0
     Result<Lmd> db = store_->GetDescriptor(collection, hit.map_id);
-    if (db.ok()) candidate.guesses = {RelativePose(query_lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset)};
+    if (!db.ok()) {  // deleted meanwhile: scores 0
+      inputs.push_back(std::move(candidate));
+      continue;
+    }
+    candidate.guesses = {RelativePose(query_lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset)};
+    Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit, db->frame.heading);
+    if (prepared.ok()) candidate.db = std::move(prepared).value();
     inputs.push_back(std::move(candidate));
   }
   std::vector<VerifiedStoreHit> out;
-  for (const VerifiedHit& verified : VerifyHits(query, inputs)) {
+  VerifyOptions options;
+  // As lmd-eval's "best": the index already chose the best of the four
+  // orientations, so the guided search stays near its guess (a quarter-turn
+  // search costs 4x and the guess-free fallback still covers a wrong turn).
+  options.match.quarter_turns = false;
+  const PreparedQuery prepared_query = PrepareQuery(query, options.match, query_lmd.frame.heading);
+  for (const VerifiedHit& verified : VerifyHits(prepared_query, inputs, options)) {
     VerifiedStoreHit hit;
     hit.hit = hits[verified.map_id];
     hit.verified = verified.verified && verified.score > 0;

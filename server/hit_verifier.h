@@ -41,8 +41,10 @@ class HitVerifier {
                                                size_t candidates);
 
  private:
-  // The prepared db map of a hit, from the cache or built from the store.
-  Result<std::shared_ptr<const PreparedMap>> Prepared(const std::string& collection, const StoreHit& hit);
+  // The prepared db map of a hit, from the cache or built from the store;
+  // `heading` is its planned frame's heading (the same entropy compass).
+  Result<std::shared_ptr<const PreparedMap>> Prepared(const std::string& collection, const StoreHit& hit,
+                                                      double heading);
 
   const MapStore* const store_;
   const size_t capacity_;

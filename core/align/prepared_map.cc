@@ -150,7 +150,8 @@ size_t PreparedMap::MemoryBytes() const {
   return bytes;
 }
 
-PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options) {
+PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options,
+                          std::optional<double> known_heading) {
   PreparedMap m;
   m.options = options;
   m.options.cell_m = std::max(0.01, options.cell_m);
@@ -168,15 +169,15 @@ PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOp
     m.max_corner.x = std::max(m.max_corner.x, p.x);
     m.max_corner.y = std::max(m.max_corner.y, p.y);
   }
-  m.heading = EstimateDominantOrientation(m.points, options.orientation);
+  m.heading = known_heading ? *known_heading : EstimateDominantOrientation(m.points, options.orientation);
   BuildPyramid(&m);
   BuildBuckets(&m);
   BuildNormals(&m);
   return m;
 }
 
-PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options) {
-  PreparedMap m = PreparePoints(map.points, options);
+PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options, std::optional<double> known_heading) {
+  PreparedMap m = PreparePoints(map.points, options, known_heading);
   if (options.free_space && !m.empty() && (!map.scans.empty() || !map.trajectory.empty())) {
     m.occupancy = BuildOccupancyGrid(map, 0.0, options.free_grid);
   }

@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/grid/occupancy_grid.h"
@@ -78,9 +79,13 @@ struct PreparedMap {
 // free space, from its scans). Cost is linear in the point count plus the grid
 // area plus the beams (~2-10 ms for a real local map).
 // Points that are not finite are dropped. Options out of range are clamped
-// (cell_m >= 0.01, levels in [1, 12]).
-PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options = {});
-PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options = {});
+// (cell_m >= 0.01, levels in [1, 12]). `known_heading`: the entropy compass of
+// these points, when the caller has it already (a stored map's planned frame:
+// same function, same points), which saves about a third of the cost.
+PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options = {},
+                       std::optional<double> known_heading = std::nullopt);
+PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options = {},
+                          std::optional<double> known_heading = std::nullopt);
 
 // Index of the map point nearest to p within max_dist_m (<= neighbour_cell_m),
 // or -1 if none. *dist2 (if not null) receives its squared distance.

@@ -62,7 +62,8 @@ bool Matchable(const PreparedQuery& query, const PreparedMap& db, const ScanMatc
 
 }  // namespace
 
-PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options) {
+PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options,
+                           std::optional<double> known_heading) {
   PreparedQuery q;
   q.points.reserve(query.points.size());
   for (const Point2& p : query.points) {
@@ -77,7 +78,7 @@ PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& option
     q.centroid.x /= q.search_points.size();
     q.centroid.y /= q.search_points.size();
   }
-  q.heading = EstimateDominantOrientation(q.points, options.map.orientation);
+  q.heading = known_heading ? *known_heading : EstimateDominantOrientation(q.points, options.map.orientation);
   return q;
 }
 

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "core/align/correlative_search.h"
@@ -51,7 +52,9 @@ struct PreparedQuery {
   Point2 centroid;                    // mean of search_points
   double heading = 0.0;               // rad in [0, pi/2), entropy compass
 };
-PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options = {});
+// `known_heading`: as for PrepareMap (the query's planned frame heading).
+PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& options = {},
+                           std::optional<double> known_heading = std::nullopt);
 
 struct ScanMatch {
   Pose2 pose;                 // query own frame in db own frame

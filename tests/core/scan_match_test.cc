@@ -11,6 +11,7 @@
 #include "core/eval/ground_truth.h"
 #include "core/localmap/pose_ops.h"
 #include "core/sim/simulate.h"
+#include "core/viewpoint/viewpoint.h"
 
 namespace lmd {
 namespace {
@@ -217,6 +218,18 @@ TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
         ASSERT_EQ(lh.values[static_cast<size_t>(y + lh.pad) * lh.width + x + lh.pad], expect) << h << " " << x << " " << y;
       }
     }
+  }
+}
+
+// lmdd passes a stored map's planned heading to PrepareMap / PrepareQuery
+// instead of recomputing it: both must be the same entropy compass.
+TEST(PreparedMapTest, PlannedHeadingIsThePreparedHeading) {
+  const std::vector<LocalMap>& maps = DemoMaps();
+  for (size_t i = 0; i < maps.size(); i += 37) {
+    const double planned = PlanViewpoint(maps[i]).heading;
+    EXPECT_EQ(PrepareMap(maps[i]).heading, planned) << maps[i].id;
+    EXPECT_EQ(PrepareQuery(maps[i]).heading, planned) << maps[i].id;
+    EXPECT_EQ(PrepareMap(maps[i], {}, planned).heading, planned);
   }
 }
 
