@@ -18,7 +18,8 @@ struct RetrieveScratch {
   std::vector<uint32_t> touched;
   std::vector<uint32_t> word_touched;
   std::vector<uint32_t> word_counts;
-  std::vector<uint32_t> word_gains;  // kLmd: 4 per slot, one query word's term gains
+  std::vector<uint32_t> bounds;  // kLmd pass 1: 4 per slot, 2^L * raw K bound per orientation
+  std::vector<uint32_t> tables;  // kLmd pass 1: per list read, see RetrieveLmd
   std::vector<uint64_t> keys;
   KernelScratch kernel;
 };
@@ -85,7 +86,17 @@ Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
     ++word_postings_[f.word];
     const int32_t fine = cell0_ >> options_.pyramid_levels, side = 1 << options_.pyramid_levels;
     const int32_t sx = (f.x - FloorDiv(f.x, cell0_) * cell0_) / fine, sy = (f.y - FloorDiv(f.y, cell0_) * cell0_) / fine;
-    it->second.push_back({(slot << 8) | static_cast<uint32_t>(sx * side + sy)});
+    const Posting posting{(slot << 8) | static_cast<uint32_t>(sx * side + sy)};
+    // Lists stay sorted by slot (Retrieve reads them block by block): a
+    // reused slot goes after the postings of smaller slots.
+    auto& list = it->second;
+    if (list.empty() || list.back().slot() <= slot) {
+      list.push_back(posting);
+    } else {
+      list.insert(std::upper_bound(list.begin(), list.end(), posting,
+                                   [](const Posting& a, const Posting& b) { return a.slot() < b.slot(); }),
+                  posting);
+    }
   }
   posting_count_ += features.size();
   slot_id_[slot] = id;
@@ -184,13 +195,9 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
 
 std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
-  if (sc.counts.size() < slot_id_.size() * 4) sc.counts.resize(slot_id_.size() * 4, 0);
-  if (sc.word_gains.size() < slot_id_.size() * 4) sc.word_gains.resize(slot_id_.size() * 4, 0);
-  if (sc.word_counts.size() < slot_id_.size()) sc.word_counts.resize(slot_id_.size(), 0);
+  if (sc.bounds.size() < slot_id_.size() * 4) sc.bounds.resize(slot_id_.size() * 4, 0);
   sc.touched.clear();
-  uint32_t* counts = sc.counts.data();
-  uint32_t* word_gains = sc.word_gains.data();
-  uint32_t* word_db = sc.word_counts.data();
+  uint32_t* bounds = sc.bounds.data();
   const int32_t box = q.max_offset;
   const int levels = q.levels;
   const size_t nq = q.features.size();
@@ -207,16 +214,26 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   std::vector<Term> terms;
   std::vector<uint64_t>& keys = sc.keys;
   std::vector<const Term*> active;
-  // level_masks[(a * levels + l - 1) * 4 + w]: bit sub of word w set when term
-  // a meets level l in finest cell sub (256 cells at most: L <= 4).
-  std::vector<uint64_t> level_masks;
-  std::vector<uint32_t> table;
+  // One posting list to read, with what its postings add (see below).
+  struct ListRead {
+    const std::vector<Posting>* list;
+    size_t cursor;         // next posting to read
+    // Offset in tables: per finest cell, the gains per orientation, then the
+    // same capped for a map with a single posting in the list (see 1b).
+    uint32_t table;
+    uint32_t max_gain[4];  // per orientation: what the list can add to one map at most
+    uint32_t query_count;  // query features with the list's word
+  };
+  std::vector<ListRead> reads;
+  std::vector<uint32_t>& tables = sc.tables;
+  tables.clear();
+  const int32_t side = 1 << levels, cells = side * side;
   // Pass 1, per distinct query word: read each posting list that can matter
-  // once; per map and term, add the gain of the finest level met. A term
-  // whose box spans several level-0 cells is counted in each of them, and a
-  // word's db features can be matched once each, so a map's gain from one
-  // word is capped at gain[L] * min(query features, db features read) of
-  // that word (I^l of the word is at most that minimum).
+  // once; per map, add what its run of postings in the list can contribute
+  // to 2^L * raw K per orientation (see the caps in 1b). A query feature
+  // counts in K through the one level-0 cell its shifted position falls in,
+  // so the sum over lists bounds K even where a term's box spans several cells.
+  // 1a: the lists to read and their gain tables.
   for (size_t i = 0; i < nq;) {
     const uint32_t word = q.features[i].word;
     size_t e = i + 1;
@@ -243,7 +260,6 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     }
     const uint32_t query_count = static_cast<uint32_t>(e - i);
     i = e;
-    sc.word_touched.clear();
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     for (uint64_t key : keys) {
@@ -253,15 +269,14 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
       active.clear();
       for (const Term& t : terms)
         if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) active.push_back(&t);
-      // The cell splits into side x side finest cells. For each active term and
-      // level: the finest cells where the term meets that level (level_masks);
-      // per finest cell: the gains summed per orientation (table[sub * 4 + o]).
-      const int32_t side = 1 << levels, cells = side * side;
-      const size_t per_term = static_cast<size_t>(levels) * 4;
-      level_masks.assign(active.size() * per_term, 0);
-      table.assign(static_cast<size_t>(cells) * 4, 0);
-      for (size_t a = 0; a < active.size(); ++a) {
-        const Term& t = *active[a];
+      // The cell splits into side x side finest cells; per finest cell: the
+      // gains of the active terms summed per orientation (table[sub * 4 + o]).
+      ListRead read{&it->second, 0, static_cast<uint32_t>(tables.size()), {0, 0, 0, 0}, query_count};
+      tables.resize(tables.size() + static_cast<size_t>(cells) * 8, 0);
+      uint32_t* table = tables.data() + read.table;
+      for (const Term* active_term : active) {
+        const Term& t = *active_term;
+        uint32_t term_max = 0;
         for (int32_t sx = 0; sx < side; ++sx) {
           for (int32_t sy = 0; sy < side; ++sy) {
             int met = 0;
@@ -271,55 +286,57 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
               met = l;
             }
             const int32_t sub = sx * side + sy;
-            for (int l = 1; l <= met; ++l)
-              level_masks[a * per_term + static_cast<size_t>(l - 1) * 4 + static_cast<size_t>(sub >> 6)] |=
-                  uint64_t{1} << (sub & 63);
             table[static_cast<size_t>(sub) * 4 + static_cast<size_t>(t.o)] += gain[met];
+            term_max = std::max(term_max, gain[met]);
           }
         }
+        read.max_gain[t.o] += term_max;
       }
-      const std::vector<Posting>& list = it->second;
+      for (int32_t k = 0; k < cells * 4; ++k) table[cells * 4 + k] = std::min(table[k], gain[levels]);
       ++stats->lists_read;
-      stats->postings_read += list.size();
-      auto sub_of = [](const Posting& p) { return p.sub(); };
-      for (size_t r = 0; r < list.size();) {
+      stats->postings_read += it->second.size();
+      reads.push_back(read);
+    }
+  }
+  // 1b: the postings, one block of slots at a time, so that the per-map
+  // accumulators of a block stay in cache while every list is read (lists are
+  // sorted by slot; a list spans all maps, so reading lists one after the
+  // other would fetch a map's accumulator from memory for nearly every posting).
+  constexpr uint32_t kBlockSlots = 4096;
+  for (uint32_t block_end = kBlockSlots;; block_end += kBlockSlots) {
+    for (ListRead& read : reads) {
+      const std::vector<Posting>& list = *read.list;
+      const uint32_t* table = tables.data() + read.table;
+      const uint32_t* single = table + static_cast<size_t>(cells) * 4;
+      size_t r = read.cursor;
+      while (r < list.size() && list[r].slot() < block_end) {
         const uint32_t slot = list[r].slot();
-        size_t re = r + 1;
-        while (re < list.size() && list[re].slot() == slot) ++re;  // a map's postings are adjacent
-        uint32_t* c = word_gains + 4 * static_cast<size_t>(slot);
-        if (word_db[slot] == 0) sc.word_touched.push_back(slot);
-        word_db[slot] += static_cast<uint32_t>(re - r);
-        if (re == r + 1) {
-          const uint32_t* g = &table[static_cast<size_t>(sub_of(list[r])) * 4];
-          c[0] += g[0];
-          c[1] += g[1];
-          c[2] += g[2];
-          c[3] += g[3];
-        } else {
-          // Several features of one map: each term counts once, at its finest level.
-          uint64_t present[4] = {0, 0, 0, 0};
-          for (size_t k = r; k < re; ++k) present[sub_of(list[k]) >> 6] |= uint64_t{1} << (sub_of(list[k]) & 63);
-          for (size_t a = 0; a < active.size(); ++a) {
-            int met = 0;
-            for (int l = levels; l >= 1 && met == 0; --l) {
-              const uint64_t* m = &level_masks[a * per_term + static_cast<size_t>(l - 1) * 4];
-              if ((m[0] & present[0]) | (m[1] & present[1]) | (m[2] & present[2]) | (m[3] & present[3])) met = l;
-            }
-            c[active[a]->o] += gain[met];
-          }
+        uint32_t* b = bounds + 4 * static_cast<size_t>(slot);
+        if ((b[0] | b[1] | b[2] | b[3]) == 0) sc.touched.push_back(slot);  // a read list always adds
+        if (r + 1 == list.size() || list[r + 1].slot() != slot) {  // the common case: one posting
+          const uint32_t* g = single + static_cast<size_t>(list[r].sub()) * 4;
+          b[0] += g[0], b[1] += g[1], b[2] += g[2], b[3] += g[3];
+          ++r;
+          continue;
         }
+        // Several postings (a map's postings are adjacent): each adds its
+        // finest cell's gains, which counts a term once per posting; two caps
+        // keep the bound: the list's max_gain (each active term at its best
+        // cell) and gain[L] per matchable pair (min(query features, postings)).
+        size_t re = r + 1;
+        while (re < list.size() && list[re].slot() == slot) ++re;
+        uint32_t sum[4] = {0, 0, 0, 0};
+        for (size_t k = r; k < re; ++k) {
+          const uint32_t* g = &table[static_cast<size_t>(list[k].sub()) * 4];
+          for (int o = 0; o < 4; ++o) sum[o] += g[o];
+        }
+        const uint32_t pairs = std::min(read.query_count, static_cast<uint32_t>(re - r));
+        for (int o = 0; o < 4; ++o) b[o] += std::min(std::min(sum[o], read.max_gain[o]), gain[levels] * pairs);
         r = re;
       }
+      read.cursor = r;
     }
-    for (uint32_t slot : sc.word_touched) {
-      uint32_t* g = word_gains + 4 * static_cast<size_t>(slot);
-      uint32_t* c = counts + 4 * static_cast<size_t>(slot);
-      if ((c[0] | c[1] | c[2] | c[3]) == 0) sc.touched.push_back(slot);
-      const uint32_t cap = gain[levels] * std::min(query_count, word_db[slot]);
-      for (int o = 0; o < 4; ++o) c[o] += std::min(g[o], cap);
-      g[0] = g[1] = g[2] = g[3] = 0;
-      word_db[slot] = 0;
-    }
+    if (block_end >= slot_id_.size()) break;
   }
   // Upper bound of each touched map's score (see index.h), counters reset.
   struct Candidate {
@@ -331,7 +348,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   heap.reserve(sc.touched.size());
   const double inv_scale = std::ldexp(1.0, -levels);
   for (uint32_t slot : sc.touched) {
-    uint32_t* c = counts + 4 * static_cast<size_t>(slot);
+    uint32_t* c = bounds + 4 * static_cast<size_t>(slot);
     const uint32_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
     c[0] = c[1] = c[2] = c[3] = 0;
     const size_t nd = slot_features_[slot].size();

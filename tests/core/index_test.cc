@@ -82,6 +82,35 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
   }
 }
 
+// Pass 1 reads the posting lists in blocks of slots (index.cc): a collection
+// spanning several blocks, whose freed slots are then reused out of order,
+// must still give the exhaustive scorer's hits.
+TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeAcrossSlotBlocksAndReusedSlots) {
+  Collection c = MakeCollection(21, 3000, 4, 12, 16);
+  Index index = MakeIndex();
+  for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
+  auto expect_agreement = [&] {
+    RetrieveOptions options;
+    options.top_k = 20;
+    for (const Lmd& q : c.queries) {
+      auto inverted = index.Retrieve(q, options);
+      auto exhaustive = RetrieveExhaustive(index, q, options);
+      ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+      ASSERT_FALSE(inverted->empty());
+      ExpectSameHits(*inverted, *exhaustive);
+    }
+  };
+  expect_agreement();
+  for (size_t m = 5; m < c.maps.size(); m += 97) ASSERT_TRUE(index.Remove(m));
+  // Re-added in reverse under new ids: the freed slots are taken last-freed first.
+  for (size_t m = c.maps.size(); m-- > 5;) {
+    if ((m - 5) % 97 == 0) {
+      ASSERT_TRUE(index.Add(100000 + m, c.maps[m]).ok());
+    }
+  }
+  expect_agreement();
+}
+
 TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeForAnyPyramidAndOffsetBox) {
   Collection c = MakeCollection(12, 30, 3, 6, 60);
   for (int levels : {0, 1, 3, 4}) {
