@@ -19,7 +19,11 @@ Point2 FromFrame(const Frame& frame, const Point2& q) {
   return {frame.origin.x + c * q.x - s * q.y, frame.origin.y + s * q.x + c * q.y};
 }
 
-ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions& options) {
+namespace {
+
+// Both planners' frames, or (with_rooms false) CoG only: CoR's room search
+// costs about a third of planning and lmdd's CoG store never reads it.
+ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool with_rooms) {
   ViewpointPlan plan;
   if (map.points.empty()) {
     plan.grid = BuildOccupancyGrid(map, 0.0, options.grid);
@@ -53,6 +57,12 @@ ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions&
     cog.x /= static_cast<double>(map.points.size()), cog.y /= static_cast<double>(map.points.size());
   }
 
+  plan.cog = {cog, heading};
+  plan.cor = plan.cog;
+  if (!with_rooms) {
+    plan.frame = plan.cog;
+    return plan;
+  }
   // CoR: centre of the peak room cells.
   RoomOptions room_options;
   room_options.seed_stride = options.room_seed_stride;
@@ -63,14 +73,19 @@ ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions&
   plan.room_cells = std::move(rooms.room);
   plan.room_peak = std::move(rooms.peak);
 
-  plan.cog = {cog, heading};
   plan.cor = {cor, heading};
   plan.frame = options.planner == Planner::kCoG ? plan.cog : plan.cor;
   return plan;
 }
 
+}  // namespace
+
+ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions& options) {
+  return Plan(map, options, true);
+}
+
 Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options) {
-  return PlanViewpointDetailed(map, options).frame;
+  return Plan(map, options, options.planner == Planner::kCoR).frame;
 }
 
 }  // namespace lmd

@@ -54,7 +54,8 @@ struct ViewpointPlan {
 // points; no room cells -> CoR = CoG; empty map -> origin (0, 0), heading 0.
 ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions& options = {});
 
-// PlanViewpointDetailed(map, options).frame.
+// PlanViewpointDetailed(map, options).frame (without the room search when
+// the planner is CoG).
 Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options = {});
 
 // Own-frame point -> coordinates in `frame` (R(-heading) (p - origin)), and back.

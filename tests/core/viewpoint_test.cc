@@ -117,6 +117,30 @@ TEST(ViewpointTest, PlannedViewpointDoesNotDependOnTheMapsOwnFrame) {
   }
 }
 
+// PlanViewpoint skips the room search when the planner is CoG: same frames.
+TEST(ViewpointTest, PlanViewpointGivesTheDetailedPlansFrame) {
+  std::vector<testing::Wall> world = {{{0, 0}, {6, 0}}, {{6, 0}, {6, 4}}, {{6, 4}, {2, 4}}, {{0, 4}, {0, 0}},
+                                      {{2, 4}, {2, 9}}, {{0, 4}, {0, 9}}};
+  std::vector<Pose2> poses;
+  for (double t = 0; t < 2 * M_PI; t += M_PI / 4) poses.push_back({3, 2, t + 0.2});
+  for (double y = 4.5; y < 8.5; y += 1.0) poses.push_back({1, y, M_PI / 2});
+  const LocalMap map = testing::ScanWorld(world, poses);
+  for (Planner planner : {Planner::kCoG, Planner::kCoR}) {
+    ViewpointOptions options;
+    options.planner = planner;
+    const Frame detailed = PlanViewpointDetailed(map, options).frame;
+    const Frame plain = PlanViewpoint(map, options);
+    EXPECT_EQ(plain.origin.x, detailed.origin.x) << PlannerName(planner);
+    EXPECT_EQ(plain.origin.y, detailed.origin.y) << PlannerName(planner);
+    EXPECT_EQ(plain.heading, detailed.heading) << PlannerName(planner);
+  }
+  ViewpointOptions cor;
+  cor.planner = Planner::kCoR;
+  const ViewpointPlan plan = PlanViewpointDetailed(map, cor);
+  EXPECT_GT(std::hypot(plan.cor.origin.x - plan.cog.origin.x, plan.cor.origin.y - plan.cog.origin.y), 0.05)
+      << "the planners should differ on this map, or the test proves nothing";
+}
+
 TEST(ViewpointTest, FrameTransformsInvertEachOther) {
   const Frame f{{1.5, -2.0}, 0.4};
   const Point2 p{3.0, 4.0};
