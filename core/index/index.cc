@@ -20,6 +20,8 @@ struct RetrieveScratch {
   std::vector<uint32_t> word_counts;
   std::vector<uint32_t> bounds;  // kLmd pass 1: 4 per slot, 2^L * raw K bound per orientation
   std::vector<uint32_t> tables;  // kLmd pass 1: per list read, see RetrieveLmd
+  std::vector<uint32_t> term_gains;
+  std::vector<uint8_t> term_o;
   std::vector<uint64_t> keys;
   KernelScratch kernel;
 };
@@ -221,12 +223,18 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     // Offset in tables: per finest cell, the gains per orientation, then the
     // same capped for a map with a single posting in the list (see 1b).
     uint32_t table;
-    uint32_t max_gain[4];  // per orientation: what the list can add to one map at most
     uint32_t query_count;  // query features with the list's word
+    bool one_term_each;    // at most one active term per orientation
+    // Otherwise, per active term: its orientation (term_o[terms + a]) and its
+    // gain per finest cell (term_gains[(terms + a) * cells + sub]).
+    uint32_t terms;
+    uint32_t term_count;
   };
   std::vector<ListRead> reads;
   std::vector<uint32_t>& tables = sc.tables;
-  tables.clear();
+  std::vector<uint32_t>& term_gains = sc.term_gains;
+  std::vector<uint8_t>& term_o = sc.term_o;
+  tables.clear(), term_gains.clear(), term_o.clear();
   const int32_t side = 1 << levels, cells = side * side;
   // Pass 1, per distinct query word: read each posting list that can matter
   // once; per map, add what its run of postings in the list can contribute
@@ -271,12 +279,18 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
         if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) active.push_back(&t);
       // The cell splits into side x side finest cells; per finest cell: the
       // gains of the active terms summed per orientation (table[sub * 4 + o]).
-      ListRead read{&it->second, 0, static_cast<uint32_t>(tables.size()), {0, 0, 0, 0}, query_count};
+      ListRead read{&it->second, 0, static_cast<uint32_t>(tables.size()), query_count, true,
+                    static_cast<uint32_t>(term_o.size()), 0};
+      int terms_per_orientation[4] = {0, 0, 0, 0};
+      for (const Term* t : active) read.one_term_each &= ++terms_per_orientation[t->o] <= 1;
+      if (!read.one_term_each) {
+        read.term_count = static_cast<uint32_t>(active.size());
+        term_gains.resize(term_gains.size() + active.size() * static_cast<size_t>(cells));
+      }
       tables.resize(tables.size() + static_cast<size_t>(cells) * 8, 0);
       uint32_t* table = tables.data() + read.table;
-      for (const Term* active_term : active) {
-        const Term& t = *active_term;
-        uint32_t term_max = 0;
+      for (size_t a = 0; a < active.size(); ++a) {
+        const Term& t = *active[a];
         for (int32_t sx = 0; sx < side; ++sx) {
           for (int32_t sy = 0; sy < side; ++sy) {
             int met = 0;
@@ -287,10 +301,10 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
             }
             const int32_t sub = sx * side + sy;
             table[static_cast<size_t>(sub) * 4 + static_cast<size_t>(t.o)] += gain[met];
-            term_max = std::max(term_max, gain[met]);
+            if (!read.one_term_each) term_gains[(read.terms + a) * static_cast<size_t>(cells) + sub] = gain[met];
           }
         }
-        read.max_gain[t.o] += term_max;
+        if (!read.one_term_each) term_o.push_back(static_cast<uint8_t>(t.o));
       }
       for (int32_t k = 0; k < cells * 4; ++k) table[cells * 4 + k] = std::min(table[k], gain[levels]);
       ++stats->lists_read;
@@ -319,19 +333,27 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
           ++r;
           continue;
         }
-        // Several postings (a map's postings are adjacent): each adds its
-        // finest cell's gains, which counts a term once per posting; two caps
-        // keep the bound: the list's max_gain (each active term at its best
-        // cell) and gain[L] per matchable pair (min(query features, postings)).
+        // Several postings (a map's postings are adjacent): each term gains
+        // its best over the postings, capped by gain[L] per matchable pair
+        // (min(query features, postings)) since I^l of one cell is at most that.
         size_t re = r + 1;
         while (re < list.size() && list[re].slot() == slot) ++re;
         uint32_t sum[4] = {0, 0, 0, 0};
-        for (size_t k = r; k < re; ++k) {
-          const uint32_t* g = &table[static_cast<size_t>(list[k].sub()) * 4];
-          for (int o = 0; o < 4; ++o) sum[o] += g[o];
+        if (read.one_term_each) {
+          for (size_t k = r; k < re; ++k) {
+            const uint32_t* g = &table[static_cast<size_t>(list[k].sub()) * 4];
+            for (int o = 0; o < 4; ++o) sum[o] = std::max(sum[o], g[o]);
+          }
+        } else {
+          for (uint32_t a = 0; a < read.term_count; ++a) {
+            const uint32_t* g = &term_gains[(read.terms + a) * static_cast<size_t>(cells)];
+            uint32_t best = 0;
+            for (size_t k = r; k < re; ++k) best = std::max(best, g[list[k].sub()]);
+            sum[term_o[read.terms + a]] += best;
+          }
         }
         const uint32_t pairs = std::min(read.query_count, static_cast<uint32_t>(re - r));
-        for (int o = 0; o < 4; ++o) b[o] += std::min(std::min(sum[o], read.max_gain[o]), gain[levels] * pairs);
+        for (int o = 0; o < 4; ++o) b[o] += std::min(sum[o], gain[levels] * pairs);
         r = re;
       }
       read.cursor = r;
