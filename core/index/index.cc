@@ -360,7 +360,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     }
     if (block_end >= slot_id_.size()) break;
   }
-  // Upper bound of each touched map's score (see index.h), counters reset.
+  // Upper bound of each touched map's score (see index.h).
   struct Candidate {
     double bound;
     uint64_t id;
@@ -369,13 +369,14 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   std::vector<Candidate> heap;
   heap.reserve(sc.touched.size());
   const double inv_scale = std::ldexp(1.0, -levels);
+  auto bound_of = [&](uint32_t raw_scaled, size_t nd) {
+    const double raw = std::min(static_cast<double>(raw_scaled) * inv_scale, static_cast<double>(std::min(nq, nd)));
+    return NormalizeScore(raw, nq, nd, q.normalization);
+  };
   for (uint32_t slot : sc.touched) {
-    uint32_t* c = bounds + 4 * static_cast<size_t>(slot);
+    const uint32_t* c = bounds + 4 * static_cast<size_t>(slot);
     const uint32_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
-    c[0] = c[1] = c[2] = c[3] = 0;
-    const size_t nd = slot_features_[slot].size();
-    const double raw = std::min(static_cast<double>(best) * inv_scale, static_cast<double>(std::min(nq, nd)));
-    heap.push_back({NormalizeScore(raw, nq, nd, q.normalization), slot_id_[slot], slot});
+    heap.push_back({bound_of(best, slot_features_[slot].size()), slot_id_[slot], slot});
   }
   auto lower = [](const Candidate& a, const Candidate& b) {
     if (a.bound != b.bound) return a.bound < b.bound;
@@ -392,7 +393,15 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     heap.pop_back();
     ++stats->maps_scored;
     const auto& db = slot_features_[next.slot];
-    const KernelScore s = ScoreLmdMap(q, db.data(), db.size(), &sc.kernel);
+    // Orientations whose own bound is below the k-th score cannot put the map
+    // in the top k (nor be its best orientation there): not scored.
+    unsigned orientations = 0xF;
+    if (top.full()) {
+      const uint32_t* c = bounds + 4 * static_cast<size_t>(next.slot);
+      for (int o = 0; o < 4; ++o)
+        if (bound_of(c[o], db.size()) < top.kth_score()) orientations &= ~(1u << o);
+    }
+    const KernelScore s = ScoreLmdMap(q, db.data(), db.size(), &sc.kernel, orientations);
     MapHit hit;
     hit.map_id = next.id;
     hit.score = s.score;
@@ -400,6 +409,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     hit.offset = {s.offset_x * options_.pose_quantum_m, s.offset_y * options_.pose_quantum_m};
     top.Offer(hit);
   }
+  for (uint32_t slot : sc.touched) std::fill_n(bounds + 4 * static_cast<size_t>(slot), 4, 0u);
   return top.Take();
 }
 

@@ -135,7 +135,8 @@ double NormalizeScore(double raw, size_t nq, size_t nd, Normalization normalizat
   return raw;
 }
 
-KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t nd, KernelScratch* s) {
+KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t nd, KernelScratch* s,
+                        unsigned orientations) {
   KernelScore best;
   GroupSharedWords(q, db, nd, &s->groups);
   if (s->groups.empty()) return best;
@@ -175,6 +176,7 @@ KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t
   }
   s->offsets.push_back(static_cast<uint32_t>(s->cells.size()));
   for (int o = 0; o < 4; ++o) {
+    if ((orientations >> o & 1u) == 0) continue;
     const int32_t* rx = q.rx[o].data();
     const int32_t* ry = q.ry[o].data();
     // 1-3: matches in the box, histogram of differences, mode bin, offset.

@@ -123,9 +123,12 @@ struct KernelScratch {
   std::vector<uint32_t> used;  // how many of them are already matched
 };
 
-// kLmd score of one stored map (pose features sorted by (word, x, y)).
+// kLmd score of one stored map (pose features sorted by (word, x, y)), over
+// the orientations whose bit is set in `orientations` (bit o = o * 90 deg);
+// the others are skipped (the inverted file skips those that cannot reach
+// its top k).
 KernelScore ScoreLmdMap(const PreparedLmdQuery& query, const PoseFeature* db, size_t db_size,
-                        KernelScratch* scratch);
+                        KernelScratch* scratch, unsigned orientations = 0xF);
 
 // kBow score: sum over words of min(query count, db count), normalised.
 double ScoreBowMap(const PreparedLmdQuery& query, const PoseFeature* db, size_t db_size);

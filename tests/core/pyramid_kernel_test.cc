@@ -86,6 +86,34 @@ TEST(PyramidKernelTest, MatchesItsDefinitionOnRandomMaps) {
   EXPECT_GE(nonzero, 40);
 }
 
+TEST(PyramidKernelTest, OrientationMaskScoresOnlyTheChosenOrientations) {
+  std::mt19937_64 rng(32);
+  IndexOptions io;
+  RetrieveOptions ro;
+  KernelScratch scratch;
+  const Lmd db = RandomLmd(rng, 60, 6.0, 4);
+  const Lmd query = TransformedCopy(db, 1, 0.2, 0.1, rng, 0.05, 0.8);  // true orientation: 1
+  const PreparedLmdQuery q = PrepareLmdQuery(*ToPoseFeatures(query, io), io, ro);
+  const std::vector<PoseFeature> d = *ToPoseFeatures(db, io);
+  const KernelScore all = ScoreLmdMap(q, d.data(), d.size(), &scratch);
+  ASSERT_GT(all.score, 0.0);
+  for (int o = 0; o < 4; ++o) {
+    const KernelScore one = ScoreLmdMap(q, d.data(), d.size(), &scratch, 1u << o);
+    EXPECT_LE(one.score, all.score) << o;
+    if (one.score > 0) {
+      EXPECT_EQ(one.orientation, o);
+    }
+    if (o == all.orientation) {
+      EXPECT_EQ(one.score, all.score);
+      EXPECT_EQ(one.offset_x, all.offset_x);
+      EXPECT_EQ(one.offset_y, all.offset_y);
+    }
+  }
+  const KernelScore without_best = ScoreLmdMap(q, d.data(), d.size(), &scratch, 0xFu & ~(1u << all.orientation));
+  EXPECT_LT(without_best.score, all.score);
+  EXPECT_EQ(ScoreLmdMap(q, d.data(), d.size(), &scratch, 0u).score, 0.0);
+}
+
 TEST(PyramidKernelTest, LevelZeroIsOneCellNotTheWholeMap) {
   // Same word 6 m apart after alignment: different 5 m cells, so no match
   // at any level; 1 m apart inside one 5 m cell: level 0 only.
