@@ -19,7 +19,7 @@ void Usage(std::FILE* out) {
                "  retrieval [--log FILE...] [--out DIR] [--seed N] [--threads N] [--methods k1,k2] [--no-ablations]\n"
                "            [--max-queries N]\n"
                "      the paper's experiment (simulated change in every query) for BoW, LMD+CoG, LMD+CoR,\n"
-               "      stationary, descriptor settings #1..#8 and the product default (best) with ablations;\n"
+               "      stationary, descriptor settings #1..#8 and best (lmd's best configuration) with ablations;\n"
                "      writes DIR/results.json, DIR/report.md and SVG plots (default DIR: out/retrieval).\n"
                "  export --log FILE... --out DIR\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
