@@ -81,7 +81,7 @@ struct PreparedMap {
 // Points that are not finite are dropped. Options out of range are clamped
 // (cell_m >= 0.01, levels in [1, 12]). `known_heading`: the entropy compass of
 // these points, when the caller has it already (a stored map's planned frame:
-// same function, same points), which saves about a third of the cost.
+// same function, same points), so that it is not computed twice.
 PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options = {},
                        std::optional<double> known_heading = std::nullopt);
 PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options = {},
