@@ -57,6 +57,21 @@ void ExpectSameHits(const std::vector<MapHit>& a, const std::vector<MapHit>& b) 
   }
 }
 
+// Every query gets the same hits from the inverted file as from the
+// exhaustive scorer (and at least one hit when `expect_hits`).
+void ExpectInvertedFileAgrees(const Index& index, const std::vector<Lmd>& queries, const RetrieveOptions& options,
+                              bool expect_hits) {
+  for (const Lmd& q : queries) {
+    auto inverted = index.Retrieve(q, options);
+    auto exhaustive = RetrieveExhaustive(index, q, options);
+    ASSERT_TRUE(inverted.ok() && exhaustive.ok());
+    if (expect_hits) {
+      ASSERT_FALSE(inverted->empty());
+    }
+    ExpectSameHits(*inverted, *exhaustive);
+  }
+}
+
 TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
   for (uint64_t seed : {1, 2, 3}) {
     Collection c = MakeCollection(seed, 60, 4, 15, 80);
@@ -69,13 +84,7 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
           options.top_k = k;
           options.method = method;
           options.normalization = norm;
-          for (const Lmd& q : c.queries) {
-            auto inverted = index.Retrieve(q, options);
-            auto exhaustive = RetrieveExhaustive(index, q, options);
-            ASSERT_TRUE(inverted.ok() && exhaustive.ok());
-            ASSERT_FALSE(inverted->empty());
-            ExpectSameHits(*inverted, *exhaustive);
-          }
+          ExpectInvertedFileAgrees(index, c.queries, options, true);
         }
       }
     }
@@ -89,18 +98,9 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeAcrossSlotBlocksAndReusedSlo
   Collection c = MakeCollection(21, 3000, 4, 12, 16);
   Index index = MakeIndex();
   for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
-  auto expect_agreement = [&] {
-    RetrieveOptions options;
-    options.top_k = 20;
-    for (const Lmd& q : c.queries) {
-      auto inverted = index.Retrieve(q, options);
-      auto exhaustive = RetrieveExhaustive(index, q, options);
-      ASSERT_TRUE(inverted.ok() && exhaustive.ok());
-      ASSERT_FALSE(inverted->empty());
-      ExpectSameHits(*inverted, *exhaustive);
-    }
-  };
-  expect_agreement();
+  RetrieveOptions options;
+  options.top_k = 20;
+  ExpectInvertedFileAgrees(index, c.queries, options, true);
   for (size_t m = 5; m < c.maps.size(); m += 97) ASSERT_TRUE(index.Remove(m));
   // Re-added in reverse under new ids: the freed slots are taken last-freed first.
   for (size_t m = c.maps.size(); m-- > 5;) {
@@ -108,7 +108,7 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeAcrossSlotBlocksAndReusedSlo
       ASSERT_TRUE(index.Add(100000 + m, c.maps[m]).ok());
     }
   }
-  expect_agreement();
+  ExpectInvertedFileAgrees(index, c.queries, options, true);
 }
 
 TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeForAnyPyramidAndOffsetBox) {
@@ -124,12 +124,7 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeForAnyPyramidAndOffsetBox) {
         RetrieveOptions options;
         options.max_offset_m = max_offset;
         options.offset_bin_m = 0.25;
-        for (const Lmd& q : c.queries) {
-          auto inverted = index.Retrieve(q, options);
-          auto exhaustive = RetrieveExhaustive(index, q, options);
-          ASSERT_TRUE(inverted.ok() && exhaustive.ok());
-          ExpectSameHits(*inverted, *exhaustive);
-        }
+        ExpectInvertedFileAgrees(index, c.queries, options, false);
       }
     }
   }
@@ -168,12 +163,7 @@ TEST(IndexTest, StopWordsAreDroppedFromQueriesAlikeByBothScorers) {
       RetrieveOptions options;
       options.max_word_share = share;
       options.method = method;
-      for (const Lmd& q : c.queries) {
-        auto inverted = index.Retrieve(q, options);
-        auto exhaustive = RetrieveExhaustive(index, q, options);
-        ASSERT_TRUE(inverted.ok() && exhaustive.ok());
-        ExpectSameHits(*inverted, *exhaustive);
-      }
+      ExpectInvertedFileAgrees(index, c.queries, options, false);
     }
   }
   // A query made only of the stop word finds nothing once it is stopped.
