@@ -8,8 +8,8 @@
 // stored map (encoded Lmd + posting records). With --json the last stdout line
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
 // "bytes_per_map": z}. --setting and --bits choose the descriptor (default:
-// the product's, ProductDescriberOptions: #6 with 13-bit words). Progress goes to stderr. --cache FILE keeps the
-// described maps and queries (encoded Lmds) so that runs with other retrieval
+// the product's, ProductDescriberOptions: #6 with 13-bit words). Progress
+// goes to stderr. --cache FILE keeps the described maps and queries (encoded Lmds) so that runs with other retrieval
 // options skip the simulator and the describer (reused only if N, Q and the
 // seed match).
 #include "bench/bench/index_bench.h"
@@ -134,8 +134,9 @@ bool ParseArgs(int argc, char** argv, Args* args) {
   return true;
 }
 
-// Cache file: "lmdbench2" N Q seed setting bits, then per map / query a u32 length and
-// EncodeLmd bytes, then the query sources (u64). Native byte order.
+// Cache file: "lmdbench2" N Q seed setting bits, then per set (maps, queries)
+// its count and per Lmd a length and its EncodeLmd bytes, then the query
+// sources; every number a native-order u64.
 void PutU64(std::ofstream& out, uint64_t v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); }
 bool GetU64(std::ifstream& in, uint64_t* v) { return static_cast<bool>(in.read(reinterpret_cast<char*>(v), sizeof(*v))); }
 

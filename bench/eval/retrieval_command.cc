@@ -53,9 +53,9 @@ MethodSpec PaperMethod(const std::string& key, const std::string& label, Planner
   return m;
 }
 
-// The best configuration measured (tuned on orebro and fr101, descriptor and
-// verification depth also on intel, all seed 1;
-// see docs/results.md). lmdd serves it with three differences: one planner's
+// The best configuration measured (tuned on orebro and fr101, the descriptor
+// and the verification depth also on intel, all with seed 1; see
+// docs/results.md). lmdd serves it with three differences: one planner's
 // frames, re-ranking by overlap - 2 conflicts, 10 verified hits by default.
 MethodSpec BestMethod() {
   MethodSpec m;
