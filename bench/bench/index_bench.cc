@@ -9,9 +9,9 @@
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
 // "bytes_per_map": z}. --setting and --bits choose the descriptor (default:
 // the product's, ProductDescriberOptions: #6 with 13-bit words). Progress
-// goes to stderr. --cache FILE keeps the described maps and queries (encoded Lmds) so that runs with other retrieval
-// options skip the simulator and the describer (reused only if N, Q and the
-// seed match).
+// goes to stderr. --cache FILE keeps the described maps and queries (encoded
+// Lmds) so that runs with other retrieval options skip the simulator and the
+// describer (reused only if N, Q, the seed, the setting and the bits match).
 #include "bench/bench/index_bench.h"
 
 #include <algorithm>
