@@ -42,7 +42,8 @@ struct MethodSpec {
   size_t verify_top_n = 0;
   Rerank rerank = Rerank::kOverlap;
   bool global_fallback = true;   // guess-free scan matching when the guided match is poor
-  double verify_window_m = 2.0;
+  bool lazy_global = true;       // ... only if no candidate matched near its guess (VerifyConfig)
+  double verify_window_m = 1.0;  // m, scan-matching window around each guess (VerifyConfig)
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
   // Masks whose points the verified db map explains (a db point within 0.3 m

@@ -122,6 +122,9 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_no_global", "no guess-free scan matching fallback");
   a.global_fallback = false;
   v.push_back(a);
+  a = ablation("abl_eager_global", "guess-free fallback for every poor candidate, even when another matched");
+  a.lazy_global = false;
+  v.push_back(a);
   a = ablation("abl_verify_10", "verify the top 10 instead of the top 20");
   a.verify_top_n = 10;
   v.push_back(a);
@@ -326,12 +329,17 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
   if (verifier && n_verify > 0) {
     const LocalMap& qmap = m.stationary ? d.maps[q.map] : q.changed;
     const auto vq = verifier->Prepare(qmap);
-    for (size_t r = 0; r < n_verify; ++r) {
+    std::vector<size_t> dbs;
+    std::vector<std::vector<Pose2>> guesses;
+    for (size_t r = 0; r < n_verify && all[order[r]].score > 0; ++r) {  // never verify unscored maps
+      const Scored& s = all[order[r]];
+      dbs.push_back(s.db);
+      guesses.push_back(s.has_pose ? std::vector<Pose2>{s.pose} : std::vector<Pose2>{});
+    }
+    const std::vector<Alignment> aligned = verifier->Verify(*vq, dbs, guesses);
+    for (size_t r = 0; r < aligned.size(); ++r) {
       Scored& s = all[order[r]];
-      if (s.score <= 0) break;  // never verify maps the first stage did not score
-      std::vector<Pose2> guesses;
-      if (s.has_pose) guesses.push_back(s.pose);
-      const Alignment a = verifier->Align(*vq, s.db, guesses);
+      const Alignment& a = aligned[r];
       s.verified = true, s.has_pose = true, s.pose = a.pose;
       // Verified maps rank above every unverified one (first-stage scores are in [0, 1]).
       // kMeanDist: maps that show the place (overlap >= 0.5) first, then the
@@ -460,7 +468,7 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
   for (size_t i = 0; i < d.queries.size(); i += stride) qs.push_back(i);
   res.queries = qs.size();
 
-  std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, window)
+  std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, lazy_global, window)
   for (const MethodSpec& m : specs) {
     const DescSet& main = describers.Get({m.planner, m.setting, m.word_bits, m.interest_cell_m, m.max_features});
     const DescSet* other = nullptr;
@@ -471,11 +479,12 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
     const Verifier* verifier = nullptr;
     if (m.verify_top_n > 0) {
       char key[64];
-      std::snprintf(key, sizeof key, "%d/%g", m.global_fallback ? 1 : 0, m.verify_window_m);
+      std::snprintf(key, sizeof key, "%d/%d/%g", m.global_fallback ? 1 : 0, m.lazy_global ? 1 : 0, m.verify_window_m);
       auto& v = verifiers[key];
       if (!v) {
         VerifyConfig vc;
         vc.global_fallback = m.global_fallback;
+        vc.lazy_global = m.lazy_global;
         vc.window_m = m.verify_window_m;
         v = std::make_unique<Verifier>(&d.maps, vc);
       }

@@ -61,7 +61,26 @@ std::shared_ptr<const Verifier::Query> Verifier::Prepare(const LocalMap& query) 
   return q;
 }
 
-Alignment Verifier::Align(const Query& query, size_t db, const std::vector<Pose2>& guesses) const {
+std::vector<Alignment> Verifier::Verify(const Query& query, const std::vector<size_t>& dbs,
+                                       const std::vector<std::vector<Pose2>>& guesses) const {
+  const VerifyConfig& config = impl_->config;
+  const bool lazy = config.global_fallback && config.lazy_global;
+  std::vector<Alignment> out;
+  bool matched = false;
+  for (size_t i = 0; i < dbs.size(); ++i) {
+    out.push_back(Align(query, dbs[i], guesses[i], config.global_fallback && !lazy));
+    matched = matched || (!guesses[i].empty() && out.back().overlap >= config.matched_above);
+  }
+  if (!lazy || matched) return out;
+  for (size_t i = 0; i < dbs.size(); ++i) {
+    if (!guesses[i].empty() && out[i].overlap >= config.global_below) continue;
+    const Alignment global = Align(query, dbs[i], {}, true);
+    if (guesses[i].empty() || global.overlap > out[i].overlap) out[i] = global;
+  }
+  return out;
+}
+
+Alignment Verifier::Align(const Query& query, size_t db, const std::vector<Pose2>& guesses, bool global) const {
   const PreparedMap& map = impl_->Map(db);
   ScanMatch best;
   bool have = false;
@@ -69,7 +88,7 @@ Alignment Verifier::Align(const Query& query, size_t db, const std::vector<Pose2
     best = MatchLocalMaps(query.prepared, map, guesses, impl_->options);
     have = true;
   }
-  if (impl_->config.global_fallback && (!have || best.score < impl_->config.global_below)) {
+  if (global && (!have || best.score < impl_->config.global_below)) {
     const ScanMatch global = MatchLocalMapsGlobal(query.prepared, map, impl_->options);
     if (!have || global.score > best.score) best = global;
   }

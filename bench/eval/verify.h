@@ -14,12 +14,16 @@
 namespace lmd::eval {
 
 struct VerifyConfig {
-  double window_m = 2.0;          // m, translation window around each guess (per axis)
-  double window_deg = 10.0;       // deg, rotation window around each guess
+  double window_m = 1.0;          // m, translation window around each guess (per axis)
+  double window_deg = 5.0;        // deg, rotation window around each guess
   bool quarter_turns = false;     // also try each guess turned by 90, 180, 270 deg (the kernel
                                   // already chose the best of the 4 orientations)
   bool global_fallback = true;    // guess-free search when the guided match is poor
   double global_below = 0.5;      // overlap under which the guess-free search runs
+  // The guess-free search runs only for queries none of whose candidates
+  // matched near its guess with overlap >= matched_above (see Verify).
+  bool lazy_global = true;
+  double matched_above = 0.8;
   double inlier_radius_m = 0.3;   // m, overlap radius
 };
 
@@ -44,9 +48,16 @@ class Verifier {
   class Query;
   std::shared_ptr<const Query> Prepare(const LocalMap& query) const;
 
-  // Aligns the query to db map `db` near `guesses`; thread-safe (db maps are
-  // prepared once, on first use).
-  Alignment Align(const Query& query, size_t db, const std::vector<Pose2>& guesses) const;
+  // Aligns the query to db map `db` near `guesses`, and guess-free when
+  // `global` and the guided match is poor (or there are no guesses);
+  // thread-safe (db maps are prepared once, on first use).
+  Alignment Align(const Query& query, size_t db, const std::vector<Pose2>& guesses, bool global) const;
+
+  // Aligns the query to each of `dbs` (guesses[i] for dbs[i]) under the
+  // config's fallback policy: with lazy_global, first near the guesses only,
+  // then guess-free for the poor ones if none reached matched_above.
+  std::vector<Alignment> Verify(const Query& query, const std::vector<size_t>& dbs,
+                                const std::vector<std::vector<Pose2>>& guesses) const;
 
   // Fraction of `points` (query own frame) that, moved by `pose`, are farther
   // than radius_m from every point of db map `db` AND lie in space the db map

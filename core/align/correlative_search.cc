@@ -136,6 +136,12 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   std::vector<Block> candidates;
   BranchAndBound bnb(db, rotations);
   bnb.best_.score = static_cast<int64_t>(std::floor(std::max(0.0, options.min_score) * 255.0 * query_points.size()));
+  // Seed the bound with the exact scores at the regions' centres (offset 0):
+  // a guess is usually near the optimum, so most blocks are pruned at once.
+  for (size_t k = 0; k < rotations.size(); ++k) {
+    const int64_t centre = ScoreAt(db.levels[0], rotations[k], 0, 0);
+    if (centre > bnb.best_.score) bnb.best_ = {static_cast<int32_t>(k), 0, 0, centre};
+  }
   for (size_t k = 0; k < rotations.size(); ++k) {
     const Rotation& r = rotations[k];
     for (int dx = r.x0; dx <= r.x1; dx += top_step) {

@@ -38,7 +38,7 @@ ScanMatch Match(const PreparedQuery& query, const PreparedMap& db, const std::ve
   m.guess = coarse.region < region_guess.size() ? region_guess[coarse.region] : -1;
   if (!coarse.found) return m;
   const Overlap before = MeasureOverlap(query.points, db, coarse.pose, options.inlier_radius_m);
-  const Pose2 refined = RefinePose(query.points, db, coarse.pose, options.icp);
+  const Pose2 refined = RefinePose(query.icp_points, db, coarse.pose, options.icp);
   const Overlap after = MeasureOverlap(query.points, db, refined, options.inlier_radius_m);
   const bool keep_refined = after.fraction >= before.fraction;
   const Overlap& o = keep_refined ? after : before;
@@ -70,6 +70,7 @@ PreparedQuery PrepareQuery(const LocalMap& query, const ScanMatchOptions& option
     if (std::isfinite(p.x) && std::isfinite(p.y)) q.points.push_back(p);
   }
   q.search_points = Subsample(q.points, options.search_cell_m);
+  q.icp_points = Subsample(q.points, options.icp_cell_m);
   for (const Point2& p : q.search_points) {
     q.centroid.x += p.x;
     q.centroid.y += p.y;

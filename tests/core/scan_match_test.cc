@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/align/correlative_search.h"
 #include "core/align/verify_hits.h"
 #include "core/eval/ground_truth.h"
 #include "core/localmap/pose_ops.h"
@@ -67,13 +68,28 @@ TEST(ScanMatchTest, GuessFreeSearchRecoversKnownRigidTransforms) {
 TEST(ScanMatchTest, ConvergesFromAGuessOffByMetresAndDegrees) {
   const LocalMap& db = RichMap();
   const PreparedMap prepared = PrepareMap(db);
+  ScanMatchOptions wide;
+  wide.window_m = 2.0;
+  wide.window_deg = 10.0;
   for (const Pose2& truth : KnownTransforms()) {
     const PreparedQuery query = PrepareQuery(MovedCopy(db, truth));
     const Pose2 bad{truth.x + 1.2, truth.y - 0.9, truth.theta + Deg(8)};  // 1.5 m, 8 deg off
-    const ScanMatch m = MatchLocalMaps(query, prepared, {bad});
+    const ScanMatch m = MatchLocalMaps(query, prepared, {bad}, wide);
     EXPECT_LT(TranslationError(m.pose, truth), 0.05);
     EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5);
     EXPECT_EQ(m.guess, 0);
+  }
+}
+
+TEST(ScanMatchTest, DefaultWindowCoversAGuessOffByAMetreAndDegrees) {
+  const LocalMap& db = RichMap();
+  const PreparedMap prepared = PrepareMap(db);
+  for (const Pose2& truth : KnownTransforms()) {
+    const PreparedQuery query = PrepareQuery(MovedCopy(db, truth));
+    const Pose2 bad{truth.x - 0.7, truth.y + 0.6, truth.theta - Deg(4)};  // 0.9 m, 4 deg off
+    const ScanMatch m = MatchLocalMaps(query, prepared, {bad});
+    EXPECT_LT(TranslationError(m.pose, truth), 0.05);
+    EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5);
   }
 }
 
@@ -160,6 +176,35 @@ TEST(ScanMatchTest, VerifyHitsMovesTheTruePlaceFromFifthToFirst) {
   EXPECT_LT(AngleErrorDeg(hits[0].match.pose, truth), 2.0);
 }
 
+TEST(ScanMatchTest, VerifyHitsSkipsTheGuessFreeSearchOnceACandidateMatched) {
+  const LocalMap& db = RichMap();
+  const Pose2 truth{3.0, 0.0, 0.0};
+  const LocalMap query = MovedCopy(db, truth);
+  const auto prepared = std::make_shared<PreparedMap>(PrepareMap(db));
+  const Pose2 far_off{truth.x + 6.0, truth.y - 5.0, truth.theta};  // far outside the guided window
+  // Candidate 1 matches at its guess; candidate 2 (same place, bad guess) is
+  // left to its guided score.
+  const std::vector<HitCandidate> candidates = {{1, prepared, 0.9, {truth}}, {2, prepared, 0.8, {far_off}}};
+  const std::vector<VerifiedHit> lazy = VerifyHits(query, candidates);
+  ASSERT_EQ(lazy.size(), 2u);
+  EXPECT_EQ(lazy[0].map_id, 1u);
+  EXPECT_GT(lazy[0].score, 0.9);
+  EXPECT_EQ(lazy[1].match.guess, 0);
+  EXPECT_LT(lazy[1].score, 0.5);
+  // Never skipping: the guess-free search finds candidate 2's true pose.
+  VerifyOptions always;
+  always.matched_score = 2.0;
+  const std::vector<VerifiedHit> eager = VerifyHits(query, candidates, always);
+  const VerifiedHit& second = eager[0].map_id == 2 ? eager[0] : eager[1];
+  EXPECT_EQ(second.match.guess, -1);
+  EXPECT_GT(second.score, 0.9);
+  EXPECT_LT(TranslationError(second.match.pose, truth), 0.05);
+  // Without the good candidate nothing matched, so the search runs.
+  const std::vector<VerifiedHit> alone = VerifyHits(query, {candidates[1]});
+  EXPECT_EQ(alone[0].match.guess, -1);
+  EXPECT_GT(alone[0].score, 0.9);
+}
+
 TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
   std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}}, {2, nullptr, 0.5, {}}, {3, nullptr, 0.9, {}}};
   VerifyOptions options;
@@ -195,6 +240,35 @@ TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
                                           {2, std::make_shared<PreparedMap>(PrepareMap(one)), 0.5, {}}};
   for (const VerifiedHit& h : VerifyHits(empty, candidates)) EXPECT_EQ(h.score, 0.0);
   for (const VerifiedHit& h : VerifyHits(one, candidates)) EXPECT_EQ(h.score, 0.0);
+}
+
+// Branch and bound must return the lattice's exact best: compare with every
+// lattice pose searched alone (zero-width regions at the same lattice points).
+TEST(ScanMatchTest, CorrelativeSearchFindsTheExhaustiveBest) {
+  const PreparedMap db = PrepareMap(DemoMaps()[40]);
+  const PreparedQuery query = PrepareQuery(MovedCopy(DemoMaps()[43], {0.3, -0.2, Deg(2)}));
+  CorrelativeOptions exact;
+  exact.min_score = 0.0;  // always report the best, however poor
+  const double cell = db.options.cell_m;
+  const Point2 target{query.centroid.x + 0.37, query.centroid.y - 0.21};  // off the true pose
+  for (double theta : {0.0, Deg(3), Deg(-2)}) {
+    SearchRegion region;
+    region.theta = theta;
+    region.centroid_target = target;
+    region.half_window_x_m = region.half_window_y_m = 1.0;
+    const CorrelativeResult searched = CorrelativeSearch(query.search_points, db, {region}, exact);
+    ASSERT_TRUE(searched.found);
+    double best = 0.0;
+    for (int dx = -5; dx <= 5; ++dx) {
+      for (int dy = -5; dy <= 5; ++dy) {
+        SearchRegion one;
+        one.theta = theta;
+        one.centroid_target = {target.x + dx * cell, target.y + dy * cell};
+        best = std::max(best, CorrelativeSearch(query.search_points, db, {one}, exact).score);
+      }
+    }
+    EXPECT_NEAR(searched.score, best, 0.005) << theta;
+  }
 }
 
 TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
