@@ -9,38 +9,31 @@ namespace lmd {
 namespace {
 
 // Level h from level h-1: max over the two half-blocks along x, then along y.
+// With next.pad = prev.pad + half, next's column jx covers prev's columns
+// jx - half and jx (and rows alike); prev is 0 outside its extent.
 LikelihoodLevel NextLevel(const LikelihoodLevel& prev, int h) {
-  const int half = 1 << (h - 1);  // block of prev is `half` cells
+  const int half = 1 << (h - 1);
   LikelihoodLevel next;
   next.pad = (1 << h) - 1;
-  const int grow = next.pad - prev.pad;  // = half
-  next.width = prev.width + grow;
-  next.height = prev.height + grow;
-  // prev value at level coords (x, y) (x in [-prev.pad, ...)); 0 outside.
-  auto prev_at = [&](int x, int y) -> uint8_t {
-    const int ix = x + prev.pad, iy = y + prev.pad;
-    if (ix < 0 || iy < 0 || ix >= prev.width || iy >= prev.height) return 0;
-    return prev.values[static_cast<size_t>(iy) * prev.width + ix];
-  };
-  // Pass along x into a temporary with next's width and prev's rows.
-  std::vector<uint8_t> tmp(static_cast<size_t>(next.width) * prev.height, 0);
+  next.width = prev.width + half;
+  next.height = prev.height + half;
+  const size_t pw = static_cast<size_t>(prev.width), nw = static_cast<size_t>(next.width);
+  // Pass along x: prev's rows, next's width.
+  std::vector<uint8_t> tmp(nw * prev.height, 0);
   for (int iy = 0; iy < prev.height; ++iy) {
-    const int y = iy - prev.pad;
-    for (int jx = 0; jx < next.width; ++jx) {
-      const int x = jx - next.pad;
-      tmp[static_cast<size_t>(iy) * next.width + jx] = std::max(prev_at(x, y), prev_at(x + half, y));
-    }
+    const uint8_t* in = prev.values.data() + iy * pw;
+    uint8_t* out = tmp.data() + iy * nw;
+    for (size_t x = 0; x < pw; ++x) out[x] = in[x];
+    for (size_t x = 0; x < pw; ++x) out[x + half] = std::max(out[x + half], in[x]);
   }
-  auto tmp_at = [&](int jx, int y) -> uint8_t {
-    const int iy = y + prev.pad;
-    if (iy < 0 || iy >= prev.height) return 0;
-    return tmp[static_cast<size_t>(iy) * next.width + jx];
-  };
-  next.values.assign(static_cast<size_t>(next.width) * next.height, 0);
+  // Pass along y.
+  next.values.assign(nw * next.height, 0);
   for (int jy = 0; jy < next.height; ++jy) {
-    const int y = jy - next.pad;
-    for (int jx = 0; jx < next.width; ++jx) {
-      next.values[static_cast<size_t>(jy) * next.width + jx] = std::max(tmp_at(jx, y), tmp_at(jx, y + half));
+    uint8_t* out = next.values.data() + jy * nw;
+    if (jy < prev.height) std::copy_n(tmp.data() + jy * nw, nw, out);
+    if (jy >= half) {
+      const uint8_t* in = tmp.data() + (jy - half) * nw;
+      for (size_t x = 0; x < nw; ++x) out[x] = std::max(out[x], in[x]);
     }
   }
   return next;
