@@ -63,9 +63,10 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
     hit.verified = verified.verified && verified.score > 0;
     hit.score = verified.score;
     hit.pose = verified.match.pose;
+    if (hit.verified) hit.prepared = inputs[verified.map_id].db;
     out.push_back(std::move(hit));
   }
-  for (size_t i = candidates; i < hits.size(); ++i) out.push_back({hits[i], false, hits[i].hit.score, {}});
+  for (size_t i = candidates; i < hits.size(); ++i) out.push_back({hits[i], false, hits[i].hit.score, {}, nullptr});
   return out;
 }
 

@@ -25,6 +25,7 @@ struct VerifiedStoreHit {
   bool verified = false;
   double score = 0.0;       // verification score (verify_hits.h); the index's K if not verified
   Pose2 pose;               // scan-matched pose of the query in the db map's frame (verified only)
+  std::shared_ptr<const PreparedMap> prepared;  // the db map as matched (verified only)
 };
 
 class HitVerifier {

@@ -58,6 +58,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
 
   // A query: validated, described, and retrieved against its collection.
   struct Query {
+    LocalMap map;  // the query map, own frame
     Lmd lmd;
     std::vector<VerifiedStoreHit> hits;  // ranked; verified ones carry the scan-matched pose
   };

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/align/relative_pose.h"
+#include "core/change/geometric_changes.h"
 #include "proto/convert.h"
 #include "server/indexing.h"
 #include "server/lmd_service.h"
@@ -13,6 +14,9 @@ namespace lmd::server {
 namespace {
 
 constexpr uint32_t kDefaultTopK = 10;
+// Verification score (overlap - 2 conflicts, verify_hits.h) from which a hit
+// is taken to show the query's place, so that geometry may name changes.
+constexpr double kShowsPlaceScore = 0.5;
 
 // The core method for a wire method, or InvalidArgument if this store's
 // index cannot serve it (it indexes one planner's descriptors).
@@ -58,6 +62,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
 
   Query query;
+  query.map = FromProto(map);
   query.lmd = Describe(map);
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
@@ -69,11 +74,11 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   if (!hits.ok()) return hits.status();
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
-        verifier_.Verify(collection, FromProto(map), query.lmd, *hits, config_.verify_candidates);
+        verifier_.Verify(collection, query.map, query.lmd, *hits, config_.verify_candidates);
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();
   } else {
-    for (const StoreHit& hit : *hits) query.hits.push_back({hit, false, hit.hit.score, {}});
+    for (const StoreHit& hit : *hits) query.hits.push_back({hit, false, hit.hit.score, {}, nullptr});
   }
   if (query.hits.size() > wanted) query.hits.resize(wanted);
   return query;
@@ -162,19 +167,29 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
       wire_hits.push_back(change_hit);
     }
     uint32_t rank = 0;
-    for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r
-      size_t i = 0;
-      while (i < kept.size() && kept[i]->hit.hit.map_id != mask.db_map_id) ++i;
-      if (i == kept.size()) continue;
-      if (request->max_masks_per_hit() > 0 && per_hit[i] >= request->max_masks_per_hit()) continue;
+    auto add_mask = [&](size_t i, const ChangeMask& mask, v1::MaskSource source) {
+      if (request->max_masks_per_hit() > 0 && per_hit[i] >= request->max_masks_per_hit()) return;
       ++per_hit[i];
       v1::ChangeMask* wire = wire_hits[i]->add_masks();
       wire->set_rank(++rank);
       wire->set_score(mask.score);
+      wire->set_source(source);
       for (const Point2& p : mask.points) {
         wire->add_x(static_cast<float>(p.x));
         wire->add_y(static_cast<float>(p.y));
       }
+    };
+    // Geometric masks against the verified hits that show the query's place, in hit order.
+    for (size_t i = 0; i < kept.size(); ++i) {
+      if (!kept[i]->verified || kept[i]->score < kShowsPlaceScore || !kept[i]->prepared) continue;
+      for (const ChangeMask& mask : GeometricChanges(query->map.points, *kept[i]->prepared, kept[i]->pose, i)) {
+        add_mask(i, mask, v1::MASK_SOURCE_GEOMETRIC);
+      }
+    }
+    for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r
+      size_t i = 0;
+      while (i < kept.size() && kept[i]->hit.hit.map_id != mask.db_map_id) ++i;
+      if (i < kept.size()) add_mask(i, mask, v1::MASK_SOURCE_DESCRIPTOR);
     }
     return Status::Ok();
   });

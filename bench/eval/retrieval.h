@@ -49,6 +49,9 @@ struct MethodSpec {
   // Masks whose points the verified db map explains (a db point within 0.3 m
   // under the verified pose) are ranked after the unexplained ones.
   bool change_geometric = false;
+  // Geometric change masks (core/change/geometric_changes.h) against the
+  // hits verification matched, ranked before the descriptor's masks.
+  bool geometric_masks = false;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

@@ -77,6 +77,7 @@ MethodSpec BestMethod() {
   m.global_fallback = true;
   m.change_eval = true;
   m.change_geometric = true;
+  m.geometric_masks = true;
   return m;
 }
 
@@ -124,6 +125,10 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   v.push_back(a);
   a = ablation("abl_eager_global", "guess-free fallback for every poor candidate, even when another matched");
   a.lazy_global = false;
+  v.push_back(a);
+  a = ablation("abl_nnd_masks", "change masks from the descriptors only (LOF + NN-d), no geometric masks");
+  a.geometric_masks = false;
+  a.change_eval = true;
   v.push_back(a);
   a = ablation("abl_verify_10", "verify the top 10 instead of the top 20");
   a.verify_top_n = 10;
@@ -260,6 +265,7 @@ struct Scored {
   bool has_pose = false;
   Pose2 pose;             // query own frame in db own frame
   bool verified = false;
+  bool matched = false;   // verified with consistency >= 0.5: shows the query's place
 };
 
 struct QueryRun {
@@ -345,6 +351,7 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
       // kMeanDist: maps that show the place (overlap >= 0.5) first, then the
       // smallest mean distance (the relevant map's definition).
       const double consistency = a.overlap - 2.0 * a.conflict - 4.0 * a.reverse_conflict;
+      s.matched = consistency >= 0.5;
       double key = consistency;
       if (m.rerank == Rerank::kOverlap) key = a.overlap;
       if (m.rerank == Rerank::kMeanDist) key = (consistency >= 0.5 ? 1.0 : 0.0) + 1.0 / (1.0 + a.mean_dist_m);
@@ -396,8 +403,8 @@ MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t
 
 // First 1-based mask rank at which the task succeeds (0 = never), per threshold.
 void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
-                    Planner planner, const Verifier* verifier, std::vector<size_t>* first, size_t* masks_default,
-                    size_t* false_default) {
+                    Planner planner, const Verifier* verifier, bool geometric, std::vector<size_t>* first,
+                    size_t* masks_default, size_t* false_default) {
   const EvalQuery& q = d.queries[qi];
   std::vector<ChangeCandidate> cands;
   for (size_t r = 0; r < run.top.size(); ++r) {
@@ -419,7 +426,16 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     o.threshold = std::max(ts[t], 1e-9);  // T = 0: every feature with r > 0 (the detector needs T > 0)
     Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
     if (!masks.ok()) continue;
-    if (verifier) {
+    if (verifier && geometric) {
+      // Geometric masks against the matched hits, in hit order, before the descriptor's masks.
+      std::vector<ChangeMask> all;
+      for (const Scored& h : run.top) {
+        if (!h.matched) continue;
+        for (ChangeMask& mk : verifier->Changes(h.db, h.pose, q.changed.points)) all.push_back(std::move(mk));
+      }
+      for (ChangeMask& mk : *masks) all.push_back(std::move(mk));
+      *masks = std::move(all);
+    } else if (verifier) {
       std::vector<char> explained(masks->size(), 0);
       for (size_t r = 0; r < masks->size(); ++r) {
         const ChangeMask& mk = (*masks)[r];
@@ -501,8 +517,8 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       const QueryRun run = RunQuery(d, qi, m, plans, main, other, verifier);
       outcomes[k] = run.outcome;
       if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
-        EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr, &first[k],
-                       &masks[k], &false_alarms[k]);
+        EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr,
+                       m.geometric_masks, &first[k], &masks[k], &false_alarms[k]);
       }
       std::lock_guard<std::mutex> lock(mu);
       bar.Update(++done);

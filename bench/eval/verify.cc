@@ -7,6 +7,7 @@
 #include "core/align/icp.h"
 #include "core/align/prepared_map.h"
 #include "core/align/scan_match.h"
+#include "core/change/geometric_changes.h"
 #include "core/eval/point_grid.h"
 
 namespace lmd::eval {
@@ -127,6 +128,10 @@ double Verifier::Unexplained(size_t db, const Pose2& pose, const std::vector<Poi
     far += ((grid.empty() || grid.NearestDistance(t, radius_m) >= radius_m) && InFreeSpace(map, t)) ? 1 : 0;
   }
   return static_cast<double>(far) / static_cast<double>(points.size());
+}
+
+std::vector<ChangeMask> Verifier::Changes(size_t db, const Pose2& pose, const std::vector<Point2>& points) const {
+  return GeometricChanges(points, impl_->Map(db), pose, db);
 }
 
 }  // namespace lmd::eval

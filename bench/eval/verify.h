@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/change/change_detector.h"
 #include "core/types.h"
 
 namespace lmd::eval {
@@ -63,6 +64,10 @@ class Verifier {
   // than radius_m from every point of db map `db` AND lie in space the db map
   // observed as free: evidence of a change (not merely an unobserved area).
   double Unexplained(size_t db, const Pose2& pose, const std::vector<Point2>& points, double radius_m) const;
+
+  // Geometric change masks (core/change/geometric_changes.h) of `points`
+  // (query own frame) against db map `db` at `pose`; db_map_id = db.
+  std::vector<ChangeMask> Changes(size_t db, const Pose2& pose, const std::vector<Point2>& points) const;
 
   // Frees the prepared db maps.
   void Clear();

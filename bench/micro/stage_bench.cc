@@ -46,11 +46,13 @@ struct World {
   }
 
   // The query's top hits, itself excluded (lmdd's query is not yet stored).
-  std::vector<MapHit> Hits(size_t q) const {
+  std::vector<MapHit> Hits(size_t q, RetrieveStats* total = nullptr) const {
     RetrieveOptions options;
     options.top_k = kVerified + 1;
     options.max_offset_m = kMaxOffsetM;
-    std::vector<MapHit> hits = std::move(index.Retrieve(lmds[q], options)).value();
+    RetrieveStats stats;
+    std::vector<MapHit> hits = std::move(index.Retrieve(lmds[q], options, &stats)).value();
+    if (total) total->maps_scored += stats.maps_scored;
     hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const MapHit& h) { return h.map_id == q; }),
                hits.end());
     hits.resize(std::min(hits.size(), kVerified));
@@ -101,10 +103,15 @@ BENCHMARK(BM_PlanAndDescribe)->Unit(benchmark::kMillisecond);
 
 void BM_Retrieve(benchmark::State& state) {
   const World& w = TheWorld();
+  RetrieveStats stats;
   for (auto _ : state) {
-    for (size_t q : w.queries) benchmark::DoNotOptimize(w.Hits(q));
+    for (size_t q : w.queries) benchmark::DoNotOptimize(w.Hits(q, &stats));
   }
   state.counters["per_query"] = PerQuery(w.queries.size());
+  // Maps scored exactly per query, of the maps in the index.
+  state.counters["maps_scored"] = benchmark::Counter(static_cast<double>(stats.maps_scored) / w.queries.size(),
+                                                     benchmark::Counter::kAvgIterations);
+  state.counters["maps"] = static_cast<double>(w.maps.size());
 }
 BENCHMARK(BM_Retrieve)->Unit(benchmark::kMillisecond);
 

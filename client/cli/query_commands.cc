@@ -115,8 +115,13 @@ int ChangesCommand(const CommandContext& ctx) {
         x += mask.x(i) / mask.x_size();
         y += mask.y(i) / mask.y_size();
       }
-      std::printf("       change %-3u at (%.2f, %.2f) m, %d features, r=%.2f\n", mask.rank(), x, y, mask.x_size(),
-                  mask.score());
+      if (mask.source() == v1::MASK_SOURCE_GEOMETRIC) {
+        std::printf("       change %-3u at (%.2f, %.2f) m, %d points the stored map saw as free\n", mask.rank(), x, y,
+                    mask.x_size());
+      } else {
+        std::printf("       change %-3u at (%.2f, %.2f) m, %d features, r=%.2f\n", mask.rank(), x, y,
+                    mask.x_size(), mask.score());
+      }
     }
   }
   return 0;

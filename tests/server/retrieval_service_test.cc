@@ -173,5 +173,50 @@ TEST_F(RetrievalServiceTest, DetectChangesFindsAnAddedObject) {
   EXPECT_EQ(server_->client().DetectChanges(request, &response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
+// The corner map walked along its corridor: the trajectory gives free space.
+v1::LocalMap WalkedCornerMap() {
+  v1::LocalMap map = CornerMap(0, 0);
+  map.clear_trajectory();
+  for (double x = 0.5; x <= 7.0; x += 0.25) {
+    v1::Pose2* pose = map.add_trajectory();
+    pose->set_x(x);
+    pose->set_y(1.0);
+  }
+  return map;
+}
+
+TEST_F(RetrievalServiceTest, DetectChangesNamesAnObjectInObservedFreeSpaceGeometrically) {
+  v1::InsertMapsRequest insert = OneMapRequest("walked", "corner", WalkedCornerMap());
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(insert, &inserted).ok());
+  v1::DetectChangesRequest request;
+  request.set_collection("walked");
+  *request.mutable_map() = WalkedCornerMap();
+  v1::DetectChangesResponse response;
+  ASSERT_TRUE(server_->client().DetectChanges(request, &response).ok());
+  ASSERT_EQ(response.hits_size(), 1);
+  for (const auto& mask : response.hits(0).masks()) EXPECT_NE(mask.source(), v1::MASK_SOURCE_GEOMETRIC);
+
+  v1::LocalMap changed = WalkedCornerMap();
+  for (double x = 3.0; x <= 3.6; x += 0.05) {  // a box standing in the walked corridor
+    for (double y : {0.8, 1.2}) {
+      changed.add_x(static_cast<float>(x));
+      changed.add_y(static_cast<float>(y));
+    }
+  }
+  *request.mutable_map() = changed;
+  ASSERT_TRUE(server_->client().DetectChanges(request, &response).ok());
+  ASSERT_EQ(response.hits_size(), 1);
+  ASSERT_GE(response.hits(0).masks_size(), 1);
+  const v1::ChangeMask& top = response.hits(0).masks(0);
+  EXPECT_EQ(top.rank(), 1u);
+  EXPECT_EQ(top.source(), v1::MASK_SOURCE_GEOMETRIC);
+  ASSERT_GE(top.x_size(), 3);
+  for (int i = 0; i < top.x_size(); ++i) {
+    EXPECT_LT(std::hypot(top.x(i) - 3.3, top.y(i) - 1.0), 0.6) << top.x(i) << ", " << top.y(i);
+  }
+  EXPECT_DOUBLE_EQ(top.score(), top.x_size());
+}
+
 }  // namespace
 }  // namespace lmd::testing

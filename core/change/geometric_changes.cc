@@ -1,0 +1,92 @@
+#include "core/change/geometric_changes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+
+namespace lmd {
+namespace {
+
+size_t Root(std::vector<size_t>& parent, size_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+uint64_t CellKey(int64_t x, int64_t y) { return (static_cast<uint64_t>(x) << 32) ^ static_cast<uint32_t>(y); }
+
+// Groups of points linked by distances below radius (single linkage), via a
+// grid of radius-sized cells: only the 3x3 neighbouring cells are compared.
+std::vector<std::vector<size_t>> LinkedGroups(const std::vector<Point2>& points, double radius) {
+  std::vector<size_t> parent(points.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const double cell = std::max(radius, 1e-3), r2 = radius * radius;
+  std::unordered_map<uint64_t, std::vector<size_t>> cells;
+  auto cell_of = [&](const Point2& p, int64_t* x, int64_t* y) {
+    *x = static_cast<int64_t>(std::floor(p.x / cell));
+    *y = static_cast<int64_t>(std::floor(p.y / cell));
+  };
+  for (size_t i = 0; i < points.size(); ++i) {
+    int64_t x, y;
+    cell_of(points[i], &x, &y);
+    cells[CellKey(x, y)].push_back(i);
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    int64_t x, y;
+    cell_of(points[i], &x, &y);
+    for (int64_t dy = -1; dy <= 1; ++dy) {
+      for (int64_t dx = -1; dx <= 1; ++dx) {
+        const auto it = cells.find(CellKey(x + dx, y + dy));
+        if (it == cells.end()) continue;
+        for (size_t j : it->second) {
+          const double ex = points[i].x - points[j].x, ey = points[i].y - points[j].y;
+          if (j > i && ex * ex + ey * ey <= r2) parent[Root(parent, i)] = Root(parent, j);
+        }
+      }
+    }
+  }
+  std::unordered_map<size_t, size_t> group_of_root;
+  std::vector<std::vector<size_t>> groups;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto [it, added] = group_of_root.emplace(Root(parent, i), groups.size());
+    if (added) groups.emplace_back();
+    groups[it->second].push_back(i);
+  }
+  return groups;
+}
+
+}  // namespace
+
+std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points, const PreparedMap& db,
+                                         const Pose2& pose, uint64_t db_map_id,
+                                         const GeometricChangeOptions& options) {
+  std::vector<ChangeMask> masks;
+  if (db.empty() || db.occupancy.width() <= 1) return masks;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  std::vector<Point2> unexplained;
+  for (const Point2& p : query_points) {
+    const Point2 in_db{pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y};
+    if (NearestPoint(db, in_db, options.explained_radius_m) < 0 && InFreeSpace(db, in_db)) unexplained.push_back(p);
+  }
+  for (const std::vector<size_t>& group : LinkedGroups(unexplained, options.merge_radius_m)) {
+    if (group.size() < std::max<size_t>(1, options.min_points)) continue;
+    ChangeMask mask;
+    mask.db_map_id = db_map_id;
+    for (size_t i : group) {
+      mask.points.push_back(unexplained[i]);
+      mask.scores.push_back(1.0);
+      mask.centre.x += unexplained[i].x / group.size();
+      mask.centre.y += unexplained[i].y / group.size();
+    }
+    mask.score = static_cast<double>(group.size());
+    masks.push_back(std::move(mask));
+  }
+  std::stable_sort(masks.begin(), masks.end(), [](const ChangeMask& a, const ChangeMask& b) {
+    return a.points.size() > b.points.size();
+  });
+  for (size_t r = 0; r < masks.size(); ++r) masks[r].rank = r;
+  return masks;
+}
+
+}  // namespace lmd
