@@ -137,7 +137,9 @@ OccupancyGrid BuildOccupancyGrid(const LocalMap& map, double rotation, const Gri
   }
   OccupancyGrid grid(rotation, min_x, min_y, cell, static_cast<int>(w), static_cast<int>(h));
 
-  if (!map.scans.empty()) {
+  if (!options.free_space) {
+    // Occupied cells only (below).
+  } else if (!map.scans.empty()) {
     for (const Scan& sc : map.scans) {
       const Point2 o = rot(sc.pose.x, sc.pose.y);
       const double clear = std::min<double>(options.no_return_clear_m, sc.max_range);

@@ -28,6 +28,10 @@ struct GridOptions {
   // Beams with no return (range >= max_range) clear up to this many metres
   // (or their max_range if smaller); beams with a return clear up to it.
   double no_return_clear_m = 30.0;
+  // false: occupied cells only (everything else unknown), same extent. Walls
+  // read only occupied cells, so a planner that needs no rooms skips the
+  // ray casting, most of the grid's cost.
+  bool free_space = true;
 };
 
 // A rotated, axis-aligned grid. Cell (ix, iy) covers, in grid axes,

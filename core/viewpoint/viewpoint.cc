@@ -22,7 +22,8 @@ Point2 FromFrame(const Frame& frame, const Point2& q) {
 namespace {
 
 // Both planners' frames, or (with_rooms false) CoG only: CoR's room search
-// costs about a third of planning and lmdd's CoG store never reads it.
+// and the free space it needs cost most of planning, and lmdd's CoG store
+// never reads them. The grid then holds occupied cells only.
 ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool with_rooms) {
   ViewpointPlan plan;
   if (map.points.empty()) {
@@ -32,7 +33,9 @@ ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool wi
     return plan;
   }
   const double heading = EstimateDominantOrientation(map.points, options.orientation);
-  plan.grid = BuildOccupancyGrid(map, heading, options.grid);
+  GridOptions grid_options = options.grid;
+  grid_options.free_space = grid_options.free_space && with_rooms;  // CoG reads only occupied cells
+  plan.grid = BuildOccupancyGrid(map, heading, grid_options);
   const OccupancyGrid& grid = plan.grid;
   plan.walls = ExtractWalls(grid, options.walls);
 

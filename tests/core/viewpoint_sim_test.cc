@@ -16,6 +16,25 @@
 namespace lmd {
 namespace {
 
+// PlanViewpoint plans CoG without rooms and without free space (walls read
+// occupied cells only): the frames must be those of the full plan, exactly.
+TEST(ViewpointSimTest, CogWithoutFreeSpaceIsTheFullPlansCog) {
+  SimulationOptions options = DefaultDemoOptions();
+  options.route.length_m = 60.0;
+  const std::vector<LocalMap> maps = SimulateLocalMaps(options);
+  ASSERT_GE(maps.size(), 20u);
+  ViewpointOptions cog;
+  cog.planner = Planner::kCoG;
+  for (const LocalMap& map : maps) {
+    ASSERT_FALSE(map.scans.empty());
+    const Frame full = PlanViewpointDetailed(map, cog).cog;
+    const Frame plain = PlanViewpoint(map, cog);
+    EXPECT_EQ(plain.origin.x, full.origin.x) << map.id;
+    EXPECT_EQ(plain.origin.y, full.origin.y) << map.id;
+    EXPECT_EQ(plain.heading, full.heading) << map.id;
+  }
+}
+
 TEST(ViewpointSimTest, RevisitsOfAPlaceGetNearbyViewpoints) {
   SimulationOptions options = DefaultDemoOptions();
   options.route.length_m = 150.0;
