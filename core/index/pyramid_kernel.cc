@@ -10,6 +10,10 @@ namespace {
 
 static_assert((-3 >> 1) == -2, "cells use arithmetic right shifts as floor division by 2^k");
 
+// Up to 64 x 64 offset bins are counted in an array (3 m box, 0.5 m bins:
+// 13 x 13); wider boxes sort the matches instead.
+constexpr int32_t kMaxCountedBinsPerAxis = 64;
+
 bool PoseFeatureLess(const PoseFeature& a, const PoseFeature& b) {
   if (a.word != b.word) return a.word < b.word;
   if (a.x != b.x) return a.x < b.x;
@@ -113,6 +117,9 @@ PreparedLmdQuery PrepareLmdQuery(std::vector<PoseFeature> query, const IndexOpti
   q.normalization = options.normalization;
   q.fine_div = FloorDivider(q.cell0 >> q.levels);
   q.bin_div = FloorDivider(q.offset_bin);
+  q.bin_lo = q.bin_div(-q.max_offset);
+  const int32_t bins = q.bin_div(q.max_offset) - q.bin_lo + 1;
+  q.bins = bins <= kMaxCountedBinsPerAxis ? bins : 0;
   for (int o = 0; o < 4; ++o) {
     q.order[o].resize(n);
     for (size_t i = 0; i < n; ++i) q.order[o][i] = static_cast<uint32_t>(i);
@@ -192,22 +199,37 @@ KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t
         for (uint32_t j = start; j < g.d_end && db[j].x <= rx[i] + box; ++j) {
           const int32_t dx = db[j].x - rx[i], dy = db[j].y - ry[i];
           if (dy < -box || dy > box) continue;
-          s->matches.push_back({PackPair(q.bin_div(dx), q.bin_div(dy)), dx, dy});
+          // Bin ids ordered as (bin x, bin y) pairs, so both ways below pick the same mode.
+          const int64_t bin = q.bins ? int64_t{q.bin_div(dx) - q.bin_lo} * q.bins + (q.bin_div(dy) - q.bin_lo)
+                                     : PackPair(q.bin_div(dx), q.bin_div(dy));
+          s->matches.push_back({bin, dx, dy});
         }
       }
     }
     if (s->matches.empty()) continue;
-    std::sort(s->matches.begin(), s->matches.end(),
-              [](const KernelScratch::Match& a, const KernelScratch::Match& b) { return a.bin < b.bin; });
-    size_t mode_begin = 0, mode_count = 0;
-    for (size_t k = 0; k < s->matches.size();) {
-      size_t e = k + 1;
-      while (e < s->matches.size() && s->matches[e].bin == s->matches[k].bin) ++e;
-      if (e - k > mode_count) mode_count = e - k, mode_begin = k;
-      k = e;
+    // Mode bin: the most matches, the smallest bin id among equals.
+    int64_t mode = 0;
+    size_t mode_count = 0;
+    if (q.bins) {
+      s->bin_counts.assign(static_cast<size_t>(q.bins) * q.bins, 0);
+      for (const KernelScratch::Match& m : s->matches) ++s->bin_counts[m.bin];
+      for (size_t b = 0; b < s->bin_counts.size(); ++b) {
+        if (s->bin_counts[b] > mode_count) mode_count = s->bin_counts[b], mode = static_cast<int64_t>(b);
+      }
+    } else {
+      std::sort(s->matches.begin(), s->matches.end(),
+                [](const KernelScratch::Match& a, const KernelScratch::Match& b) { return a.bin < b.bin; });
+      for (size_t k = 0; k < s->matches.size();) {
+        size_t e = k + 1;
+        while (e < s->matches.size() && s->matches[e].bin == s->matches[k].bin) ++e;
+        if (e - k > mode_count) mode_count = e - k, mode = s->matches[k].bin;
+        k = e;
+      }
     }
     int64_t sx = 0, sy = 0;
-    for (size_t k = mode_begin; k < mode_begin + mode_count; ++k) sx += s->matches[k].dx, sy += s->matches[k].dy;
+    for (const KernelScratch::Match& m : s->matches) {
+      if (m.bin == mode) sx += m.dx, sy += m.dy;
+    }
     const int64_t c = static_cast<int64_t>(mode_count);
     // round(sum / c), halves toward +inf; exact integer arithmetic.
     auto round_mean = [c](int64_t sum) {

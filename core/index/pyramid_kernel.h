@@ -88,6 +88,10 @@ struct PreparedLmdQuery {
   FloorDivider bin_div;   // by offset_bin
   int32_t max_offset = 0;   // pose units
   int32_t offset_bin = 1;   // pose units
+  // Offset bins per axis inside the box, from bin_lo; 0 when the box holds too
+  // many bins to count them in an array (the mode is then found by sorting).
+  int32_t bin_lo = 0;
+  int32_t bins = 0;
   int32_t cell0 = 1;        // pose units, level-0 cell width
   int levels = 2;
   Normalization normalization = Normalization::kSqrt;
@@ -114,6 +118,7 @@ struct KernelScratch {
   struct Match { int64_t bin; int32_t dx, dy; };
   std::vector<Group> groups;
   std::vector<Match> matches;
+  std::vector<uint32_t> bin_counts;  // matches per offset bin (when query.bins > 0)
   // Groups with several features on a side: their distinct db cells per level,
   // sorted (cells[offsets[k * (L + 1) + l] ...]).
   std::vector<uint32_t> multi;
