@@ -64,10 +64,10 @@ struct ServerConfig {
 
   // The default method verifies the index's best `verify_candidates` hits
   // geometrically (scan matching; 1-8 ms each) and re-ranks them by aligned
-  // overlap. 0: the default method is the index alone (LMD kernel). 10 keeps
-  // DetectChanges at about 22 ms of CPU per robot-second (lmd-bench load);
-  // 20, lmd-eval's best, gains about 0.05 place recall@1 on the real logs
-  // and doubles that CPU (docs/results.md).
+  // overlap. 0: the default method is the index alone (LMD kernel). With 10,
+  // lmd-bench load at 60 robots cost lmdd 13.8 ms of CPU per robot-second;
+  // 20, lmd-eval's best, gains about 0.07 place recall@1 on the real logs
+  // (docs/results.md) and cost 20.5 ms in the same test.
   uint32_t verify_candidates = 10;
   // Largest offset (m, per axis) between the planned viewpoints of two maps
   // of one place that the default method's kernel accepts. The planners are
