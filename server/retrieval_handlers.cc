@@ -179,12 +179,15 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
         wire->add_y(static_cast<float>(p.y));
       }
     };
-    // Geometric masks against the verified hits that show the query's place, in hit order.
+    // Geometric masks against the verified hits that show the query's place (id = position in kept).
+    std::vector<AlignedMap> place;
     for (size_t i = 0; i < kept.size(); ++i) {
-      if (!kept[i]->verified || kept[i]->score < kShowsPlaceScore || !kept[i]->prepared) continue;
-      for (const ChangeMask& mask : GeometricChanges(query->map.points, *kept[i]->prepared, kept[i]->pose, i)) {
-        add_mask(i, mask, v1::MASK_SOURCE_GEOMETRIC);
+      if (kept[i]->verified && kept[i]->score >= kShowsPlaceScore && kept[i]->prepared) {
+        place.push_back({kept[i]->prepared.get(), kept[i]->pose, i});
       }
+    }
+    for (const ChangeMask& mask : GeometricChanges(query->map.points, place)) {
+      add_mask(mask.db_map_id, mask, v1::MASK_SOURCE_GEOMETRIC);
     }
     for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r
       size_t i = 0;

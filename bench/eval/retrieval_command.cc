@@ -427,12 +427,12 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
     if (!masks.ok()) continue;
     if (verifier && geometric) {
-      // Geometric masks against the matched hits, in hit order, before the descriptor's masks.
-      std::vector<ChangeMask> all;
+      // Geometric masks against the matched hits, before the descriptor's masks.
+      std::vector<std::pair<size_t, Pose2>> aligned;
       for (const Scored& h : run.top) {
-        if (!h.matched) continue;
-        for (ChangeMask& mk : verifier->Changes(h.db, h.pose, q.changed.points)) all.push_back(std::move(mk));
+        if (h.matched) aligned.push_back({h.db, h.pose});
       }
+      std::vector<ChangeMask> all = verifier->Changes(aligned, q.changed.points);
       for (ChangeMask& mk : *masks) all.push_back(std::move(mk));
       *masks = std::move(all);
     } else if (verifier) {

@@ -130,8 +130,11 @@ double Verifier::Unexplained(size_t db, const Pose2& pose, const std::vector<Poi
   return static_cast<double>(far) / static_cast<double>(points.size());
 }
 
-std::vector<ChangeMask> Verifier::Changes(size_t db, const Pose2& pose, const std::vector<Point2>& points) const {
-  return GeometricChanges(points, impl_->Map(db), pose, db);
+std::vector<ChangeMask> Verifier::Changes(const std::vector<std::pair<size_t, Pose2>>& aligned,
+                                          const std::vector<Point2>& points) const {
+  std::vector<AlignedMap> maps;
+  for (const auto& [db, pose] : aligned) maps.push_back({&impl_->Map(db), pose, db});
+  return GeometricChanges(points, maps);
 }
 
 }  // namespace lmd::eval

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "core/change/change_detector.h"
@@ -66,8 +67,10 @@ class Verifier {
   double Unexplained(size_t db, const Pose2& pose, const std::vector<Point2>& points, double radius_m) const;
 
   // Geometric change masks (core/change/geometric_changes.h) of `points`
-  // (query own frame) against db map `db` at `pose`; db_map_id = db.
-  std::vector<ChangeMask> Changes(size_t db, const Pose2& pose, const std::vector<Point2>& points) const;
+  // (query own frame) against the db maps `aligned` (index, query pose in
+  // it) of the query's place; a mask's db_map_id is a db map index.
+  std::vector<ChangeMask> Changes(const std::vector<std::pair<size_t, Pose2>>& aligned,
+                                  const std::vector<Point2>& points) const;
 
   // Frees the prepared db maps.
   void Clear();

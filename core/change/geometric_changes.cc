@@ -58,27 +58,46 @@ std::vector<std::vector<size_t>> LinkedGroups(const std::vector<Point2>& points,
 
 }  // namespace
 
-std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points, const PreparedMap& db,
-                                         const Pose2& pose, uint64_t db_map_id,
+std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points, const std::vector<AlignedMap>& maps,
                                          const GeometricChangeOptions& options) {
-  std::vector<ChangeMask> masks;
-  if (db.empty() || db.occupancy.width() <= 1) return masks;
-  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-  std::vector<Point2> unexplained;
-  for (const Point2& p : query_points) {
-    const Point2 in_db{pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y};
-    if (NearestPoint(db, in_db, options.explained_radius_m) < 0 && InFreeSpace(db, in_db)) unexplained.push_back(p);
+  struct Placed {
+    const AlignedMap* map;
+    double c, s;
+  };
+  std::vector<Placed> placed;
+  for (const AlignedMap& m : maps) {
+    if (m.db && !m.db->empty()) placed.push_back({&m, std::cos(m.pose.theta), std::sin(m.pose.theta)});
   }
-  for (const std::vector<size_t>& group : LinkedGroups(unexplained, options.merge_radius_m)) {
+  // Change points, and for each the maps (bits, in `maps` order) that saw it free.
+  std::vector<Point2> changed;
+  std::vector<std::vector<bool>> seen_free;
+  for (const Point2& p : query_points) {
+    bool explained = false;
+    std::vector<bool> free(placed.size(), false);
+    for (size_t k = 0; k < placed.size() && !explained; ++k) {
+      const Pose2& t = placed[k].map->pose;
+      const Point2 in_db{t.x + placed[k].c * p.x - placed[k].s * p.y, t.y + placed[k].s * p.x + placed[k].c * p.y};
+      explained = NearestPoint(*placed[k].map->db, in_db, options.explained_radius_m) >= 0;
+      free[k] = !explained && InFreeSpace(*placed[k].map->db, in_db);
+    }
+    if (explained || std::find(free.begin(), free.end(), true) == free.end()) continue;
+    changed.push_back(p);
+    seen_free.push_back(std::move(free));
+  }
+  std::vector<ChangeMask> masks;
+  for (const std::vector<size_t>& group : LinkedGroups(changed, options.merge_radius_m)) {
     if (group.size() < std::max<size_t>(1, options.min_points)) continue;
     ChangeMask mask;
-    mask.db_map_id = db_map_id;
+    std::vector<size_t> free_votes(placed.size(), 0);
     for (size_t i : group) {
-      mask.points.push_back(unexplained[i]);
+      mask.points.push_back(changed[i]);
       mask.scores.push_back(1.0);
-      mask.centre.x += unexplained[i].x / group.size();
-      mask.centre.y += unexplained[i].y / group.size();
+      mask.centre.x += changed[i].x / group.size();
+      mask.centre.y += changed[i].y / group.size();
+      for (size_t k = 0; k < placed.size(); ++k) free_votes[k] += seen_free[i][k] ? 1 : 0;
     }
+    const size_t credited = std::max_element(free_votes.begin(), free_votes.end()) - free_votes.begin();
+    mask.db_map_id = placed[credited].map->id;
     mask.score = static_cast<double>(group.size());
     masks.push_back(std::move(mask));
   }

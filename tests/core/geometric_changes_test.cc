@@ -20,7 +20,8 @@ const std::vector<LocalMap>& DemoMaps() {
 TEST(GeometricChangesTest, AnUnchangedMapHasNoMasks) {
   for (size_t i = 0; i < DemoMaps().size(); i += 37) {
     const LocalMap& map = DemoMaps()[i];
-    EXPECT_TRUE(GeometricChanges(map.points, PrepareMap(map), Pose2{}, 7).empty()) << map.id;
+    const PreparedMap prepared = PrepareMap(map);
+    EXPECT_TRUE(GeometricChanges(map.points, {{&prepared, Pose2{}, 7}}).empty()) << map.id;
   }
 }
 
@@ -35,7 +36,8 @@ TEST(GeometricChangesTest, TheTopMaskIsTheSimulatedChange) {
     Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
     if (!change.ok()) continue;
     ++tasks;
-    const std::vector<ChangeMask> masks = GeometricChanges(changed.points, PrepareMap(map), Pose2{}, 7);
+    const PreparedMap prepared = PrepareMap(map);
+    const std::vector<ChangeMask> masks = GeometricChanges(changed.points, {{&prepared, Pose2{}, 7}});
     if (masks.empty()) continue;
     EXPECT_EQ(masks[0].db_map_id, 7u);
     EXPECT_EQ(masks[0].rank, 0u);
@@ -46,19 +48,44 @@ TEST(GeometricChangesTest, TheTopMaskIsTheSimulatedChange) {
   EXPECT_GE(found, 18) << "top mask on the change in " << found << " of " << tasks;
 }
 
+// Objects that another stored map of the place already shows are not new;
+// a mask is credited to the map that saw its points free.
+TEST(GeometricChangesTest, AnObjectAnotherStoredMapShowsIsNoChange) {
+  std::mt19937_64 rng(9);
+  const LocalMap& map = DemoMaps()[60];
+  LocalMap changed = map;
+  ASSERT_TRUE(ApplySimulatedChange(changed, rng).ok());
+  const PreparedMap before = PrepareMap(map);
+  const PreparedMap after = PrepareMap(changed);  // a stored map made after the change
+  const std::vector<ChangeMask> against_before = GeometricChanges(changed.points, {{&before, Pose2{}, 1}});
+  ASSERT_FALSE(against_before.empty());
+  EXPECT_EQ(against_before[0].db_map_id, 1u);
+  EXPECT_TRUE(GeometricChanges(changed.points, {{&before, Pose2{}, 1}, {&after, Pose2{}, 2}}).empty());
+  // Listed first but without free space, the bare copy never gets the credit.
+  LocalMap bare;
+  bare.points = map.points;
+  const PreparedMap bare_prepared = PrepareMap(bare);
+  const std::vector<ChangeMask> credited =
+      GeometricChanges(changed.points, {{&bare_prepared, Pose2{}, 3}, {&before, Pose2{}, 1}});
+  ASSERT_EQ(credited.size(), against_before.size());
+  for (const ChangeMask& mask : credited) EXPECT_EQ(mask.db_map_id, 1u);
+}
+
 TEST(GeometricChangesTest, PointsTheDbMapNeverObservedAreNotChanges) {
   const LocalMap& map = DemoMaps()[20];
   const PreparedMap prepared = PrepareMap(map);
   // Far outside everything the db map's beams crossed.
   std::vector<Point2> far;
   for (int k = 0; k < 50; ++k) far.push_back({500.0 + 0.05 * k, 500.0});
-  EXPECT_TRUE(GeometricChanges(far, prepared, Pose2{}, 1).empty());
+  EXPECT_TRUE(GeometricChanges(far, {{&prepared, Pose2{}, 1}}).empty());
   // A db map without scans or trajectory has no free space: no masks.
   LocalMap bare;
   bare.points = map.points;
   LocalMap shifted = map;
   for (Point2& p : shifted.points) p.x += 1.0;
-  EXPECT_TRUE(GeometricChanges(shifted.points, PrepareMap(bare), Pose2{}, 1).empty());
+  const PreparedMap bare_prepared = PrepareMap(bare);
+  EXPECT_TRUE(GeometricChanges(shifted.points, {{&bare_prepared, Pose2{}, 1}}).empty());
+  EXPECT_TRUE(GeometricChanges(shifted.points, {}).empty());
 }
 
 }  // namespace
