@@ -50,14 +50,10 @@ class Verifier {
   class Query;
   std::shared_ptr<const Query> Prepare(const LocalMap& query) const;
 
-  // Aligns the query to db map `db` near `guesses`, and guess-free when
-  // `global` and the guided match is poor (or there are no guesses);
-  // thread-safe (db maps are prepared once, on first use).
-  Alignment Align(const Query& query, size_t db, const std::vector<Pose2>& guesses, bool global) const;
-
   // Aligns the query to each of `dbs` (guesses[i] for dbs[i]) under the
   // config's fallback policy: with lazy_global, first near the guesses only,
   // then guess-free for the poor ones if none reached matched_above.
+  // Thread-safe (db maps are prepared once, on first use).
   std::vector<Alignment> Verify(const Query& query, const std::vector<size_t>& dbs,
                                 const std::vector<std::vector<Pose2>>& guesses) const;
 
@@ -76,6 +72,10 @@ class Verifier {
   void Clear();
 
  private:
+  // Aligns the query to db map `db` near `guesses`, and guess-free when
+  // `global` and the guided match is poor (or there are no guesses).
+  Alignment Align(const Query& query, size_t db, const std::vector<Pose2>& guesses, bool global) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
