@@ -148,7 +148,7 @@ int DemoCommand(const CommandContext& ctx) {
     std::printf("\n           %d change masks; top mask %.2f m from the new objects: %s\n", masks, mask_distance,
                 found ? "change found" : "change missed");
 
-    if (!pictured && db && top.hit().has_pose()) {
+    if (!pictured && db && place_ok && top.hit().has_pose()) {  // the first right localisation
       ResultPicture picture;
       picture.query = &query;
       picture.db = db;
@@ -166,6 +166,7 @@ int DemoCommand(const CommandContext& ctx) {
       pictured = true;
     }
   }
+  if (!pictured) std::printf("\nno picture: no top hit showed the query's place\n");
   std::printf("\nsummary: %d/%d queries localised at the right place by the top hit (%d of them show a place "
               "robot 1 had mapped); true change in the top mask for %d/%d\n",
               right_place, asked, revisits, change_found, asked);
