@@ -146,8 +146,9 @@ void BM_VerifyTopHits(benchmark::State& state) {
     }
   }
   state.counters["per_query"] = PerQuery(queries.size());
-  // Share of verified hits whose guided match scored low, so that the guess-free search ran too.
-  state.counters["low_guided_share"] = verified ? static_cast<double>(low) / verified : 0.0;
+  // Share of verified hits scoring below global_below_score (the guess-free
+  // search ran for them when no other hit of the query matched).
+  state.counters["low_score_share"] = verified ? static_cast<double>(low) / verified : 0.0;
   // Correlative block scores per verified hit (the search's cost).
   state.counters["evaluations"] = verified ? static_cast<double>(evaluations) / verified : 0.0;
   size_t points = 0;

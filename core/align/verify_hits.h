@@ -8,7 +8,8 @@
 // that way, run the guess-free search for every candidate that scored below
 // global_below_score (or had no guesses) and keep the better of the two. The
 // guess-free search costs several guided ones; once one candidate matched
-// well, it rarely changes the order of the top hits. Verification score = overlap score - conflict_weight * conflict
+// well, it rarely changes the order of the top hits.
+// Verification score = overlap score - conflict_weight * conflict
 // fraction (query points the db map saw as free space): a wrong place that
 // shares walls with the query usually also puts walls in its free space.
 // Candidates are then ordered by verification score (descending), exact ties

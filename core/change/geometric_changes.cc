@@ -5,7 +5,6 @@
 #include <numeric>
 #include <unordered_map>
 
-
 namespace lmd {
 namespace {
 
@@ -68,33 +67,36 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
   for (const AlignedMap& m : maps) {
     if (m.db && !m.db->empty()) placed.push_back({&m, std::cos(m.pose.theta), std::sin(m.pose.theta)});
   }
-  // Change points, and for each the maps (bits, in `maps` order) that saw it free.
+  // Change points, and for each the maps that saw it free: seen_free[i * n + k]
+  // for change point i and placed map k.
+  const size_t n = placed.size();
   std::vector<Point2> changed;
-  std::vector<std::vector<bool>> seen_free;
+  std::vector<uint8_t> seen_free;
+  std::vector<uint8_t> free(n);
   for (const Point2& p : query_points) {
-    bool explained = false;
-    std::vector<bool> free(placed.size(), false);
-    for (size_t k = 0; k < placed.size() && !explained; ++k) {
+    bool explained = false, any_free = false;
+    for (size_t k = 0; k < n && !explained; ++k) {
       const Pose2& t = placed[k].map->pose;
       const Point2 in_db{t.x + placed[k].c * p.x - placed[k].s * p.y, t.y + placed[k].s * p.x + placed[k].c * p.y};
       explained = NearestPoint(*placed[k].map->db, in_db, options.explained_radius_m) >= 0;
       free[k] = !explained && InFreeSpace(*placed[k].map->db, in_db);
+      any_free = any_free || free[k];
     }
-    if (explained || std::find(free.begin(), free.end(), true) == free.end()) continue;
+    if (explained || !any_free) continue;
     changed.push_back(p);
-    seen_free.push_back(std::move(free));
+    seen_free.insert(seen_free.end(), free.begin(), free.end());
   }
   std::vector<ChangeMask> masks;
   for (const std::vector<size_t>& group : LinkedGroups(changed, options.merge_radius_m)) {
     if (group.size() < std::max<size_t>(1, options.min_points)) continue;
     ChangeMask mask;
-    std::vector<size_t> free_votes(placed.size(), 0);
+    std::vector<size_t> free_votes(n, 0);
     for (size_t i : group) {
       mask.points.push_back(changed[i]);
       mask.scores.push_back(1.0);
       mask.centre.x += changed[i].x / group.size();
       mask.centre.y += changed[i].y / group.size();
-      for (size_t k = 0; k < placed.size(); ++k) free_votes[k] += seen_free[i][k] ? 1 : 0;
+      for (size_t k = 0; k < n; ++k) free_votes[k] += seen_free[i * n + k];
     }
     const size_t credited = std::max_element(free_votes.begin(), free_votes.end()) - free_votes.begin();
     mask.db_map_id = placed[credited].map->id;
