@@ -19,6 +19,7 @@ enum class Rerank {
   kOverlap,   // fraction of query points within 0.3 m of the db map after alignment
   kMeanDist,  // maps with consistency >= 0.5 first, then the smallest mean distance after alignment
   kConsistency,  // overlap - 2 * (query points in db free space) - 4 * (db points in query free space)
+  kConsistencyDist,  // kConsistency - 0.5 * min(mean distance after alignment, 3 m)
 };
 
 // One method: a descriptor configuration, a first-stage similarity and an
