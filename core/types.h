@@ -58,12 +58,16 @@ struct Frame {
   double heading = 0;  // rad, dominant orientation, in [0, pi/2)
 };
 
+// No word (Feature::inner_word of a descriptor described without one).
+inline constexpr uint32_t kNoWord = 0xFFFFFFFF;
+
 // One feature of a local map descriptor.
 struct Feature {
-  uint32_t appearance_word = 0;  // B-bit visual word (B <= 32)
+  uint32_t appearance_word = 0;  // B-bit visual word (B <= 32) of the radius-R context
   float x = 0.0f;                // pose word source: position in the planned
   float y = 0.0f;                //   frame, m (quantised when indexed)
   uint64_t change_word = 0;      // 60-bit change word
+  uint32_t inner_word = kNoWord;  // B-bit visual word of the inner context, or kNoWord
 };
 
 // Local map descriptor (LMD): the planned frame and the feature list.

@@ -264,7 +264,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
     for (const auto& posting : *old_postings) batch.Delete(postings_cf_, collection + "/" + posting.key);
     record->set_maps(record->maps() - 1);
     record->set_points(record->points() - old_points);
-    record->set_postings(record->postings() - old_lmd.features.size());
+    record->set_postings(record->postings() - PoseFeatureCount(old_lmd));
     return Status::Ok();
   };
 
@@ -293,14 +293,14 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
     internal::IndexedMap indexed;
     indexed.set_index_id(index_id);
     indexed.set_lmd(EncodeLmd(write.lmd));
-    indexed.set_postings(static_cast<uint32_t>(write.lmd.features.size()));
+    indexed.set_postings(static_cast<uint32_t>(PoseFeatureCount(write.lmd)));
     batch.Put(maps_cf_, key, write.map.SerializeAsString());
     batch.Put(metadata_cf_, key, meta->SerializeAsString());
     batch.Put(descriptors_cf_, key, indexed.SerializeAsString());
     for (const auto& posting : *postings) batch.Put(postings_cf_, collection + "/" + posting.key, posting.value);
     record.set_maps(record.maps() + 1);
     record.set_points(record.points() + meta->point_count());
-    record.set_postings(record.postings() + write.lmd.features.size());
+    record.set_postings(record.postings() + PoseFeatureCount(write.lmd));
     written[key] = {index_id, &write};
     changes[collection].added.push_back({index_id, &write});
   }
@@ -383,7 +383,7 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   internal::CollectionRecord record = state->record;
   record.set_maps(record.maps() - 1);
   record.set_points(record.points() - meta->point_count());
-  record.set_postings(record.postings() - lmd->features.size());
+  record.set_postings(record.postings() - PoseFeatureCount(*lmd));
   rocksdb::WriteBatch batch;
   batch.Delete(maps_cf_, key);
   batch.Delete(metadata_cf_, key);

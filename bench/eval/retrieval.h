@@ -35,6 +35,7 @@ struct MethodSpec {
   int word_bits = 10;          // appearance word bits B (paper: 10)
   double interest_cell_m = 0.5;  // describer interest grid (DescriberOptions default)
   int max_features = 80;         // describer cap (DescriberOptions default)
+  double inner_radius_m = 0.0;   // m, inner words (DescriberOptions; 0 = none, the paper's)
   // First stage.
   Method method = Method::kLmd;
   double max_offset_m = 0.5;     // RetrieveOptions::max_offset_m (its default)

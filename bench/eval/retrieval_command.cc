@@ -68,6 +68,7 @@ MethodSpec BestMethod() {
     if (ds.radius_m == product.setting.radius_m && ds.sectors == product.setting.sectors) m.setting = s;
   }
   m.word_bits = product.word_bits;
+  m.inner_radius_m = product.inner_radius_m;
   m.max_offset_m = 3.0;
   // 40: the right place is among the first stage's top 20 for 83 % of the
   // queries and among its top 50 for 91 % (all logs, seed 2); with the
@@ -141,8 +142,12 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
   a.verify_top_n = 20;
   v.push_back(a);
-  a = ablation("abl_desc1_10bit", "descriptor #1 (R=1, A=1) with 10-bit words (the paper's) instead of #6 with 13");
-  a.setting = 1, a.word_bits = 10;
+  a = ablation("abl_no_inner", "no inner words (only the R = 6 m word per interest point)");
+  a.inner_radius_m = 0.0;
+  v.push_back(a);
+  a = ablation("abl_desc1_10bit",
+                "descriptor #1 (R=1, A=1) with 10-bit words (the paper's) instead of #6 with 13 bits and inner words");
+  a.setting = 1, a.word_bits = 10, a.inner_radius_m = 0.0;
   v.push_back(a);
   return v;
 }
@@ -157,9 +162,10 @@ struct DescKey {
   int word_bits;
   double cell;
   int max_features;
+  double inner_radius;
   bool operator<(const DescKey& o) const {
-    return std::tie(planner, setting, word_bits, cell, max_features) <
-           std::tie(o.planner, o.setting, o.word_bits, o.cell, o.max_features);
+    return std::tie(planner, setting, word_bits, cell, max_features, inner_radius) <
+           std::tie(o.planner, o.setting, o.word_bits, o.cell, o.max_features, o.inner_radius);
   }
 };
 
@@ -196,6 +202,7 @@ class Describers {
     o.word_bits = key.word_bits;
     o.interest_cell_m = key.cell;
     o.max_features = key.max_features;
+    o.inner_radius_m = key.inner_radius;
     const size_t n = d_.maps.size(), nq = d_.queries.size();
     s.db.resize(n), s.db_pf.resize(n), s.db_ms.resize(n);
     s.q.resize(nq), s.q_pf.resize(nq), s.q_ms.resize(nq);
@@ -499,11 +506,11 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
 
   std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, lazy_global, window)
   for (const MethodSpec& m : specs) {
-    const DescSet& main = describers.Get({m.planner, m.setting, m.word_bits, m.interest_cell_m, m.max_features});
+    const DescSet& main = describers.Get({m.planner, m.setting, m.word_bits, m.interest_cell_m, m.max_features, m.inner_radius_m});
     const DescSet* other = nullptr;
     if (m.both_planners) {
       other = &describers.Get({m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG, m.setting,
-                               m.word_bits, m.interest_cell_m, m.max_features});
+                               m.word_bits, m.interest_cell_m, m.max_features, m.inner_radius_m});
     }
     const Verifier* verifier = nullptr;
     if (m.verify_top_n > 0) {

@@ -206,6 +206,7 @@ DescriberOptions ProductDescriberOptions() {
   DescriberOptions options;
   options.setting = PaperDescriptorSetting(6);
   options.word_bits = 13;
+  options.inner_radius_m = 3.0;
   return options;
 }
 
@@ -231,6 +232,7 @@ Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& op
   for (size_t i = 0; i < q.size(); ++i) {
     keys[i] = {static_cast<int64_t>(std::floor(q[i].x / raster)), static_cast<int64_t>(std::floor(q[i].y / raster))};
   }
+  const double inner_radius = bits <= 15 && options.inner_radius_m < radius ? std::max(options.inner_radius_m, 0.0) : 0.0;
   const double max_radius = options.change_words ? std::max(radius, kChangeRadiusM) : radius;
   const PointBuckets buckets(std::move(keys), raster, std::max(1.0, max_radius / 4));
 
@@ -271,7 +273,7 @@ Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& op
 
   const std::vector<double> projection = ProjectionMatrix(options.projection_seed, bits, shells * sectors);
   const bool same_change = radius == kChangeRadiusM && shells == 10;
-  std::vector<double> fine, hist, change_fine, change_hist;
+  std::vector<double> fine, hist, change_fine, change_hist, inner_fine, inner_hist;
   lmd.features.reserve(interest.size());
   for (const Interest& ip : interest) {
     Feature f;
@@ -280,6 +282,11 @@ Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& op
     FineHistogram(buckets, ip.p.x, ip.p.y, radius, shells, raster * 0.5, fine);
     Collapse(fine, shells, sectors, CanonicalQuarter(fine, shells), hist);
     f.appearance_word = AppearanceWord(hist, projection, bits);
+    if (inner_radius > 0) {
+      FineHistogram(buckets, ip.p.x, ip.p.y, inner_radius, shells, raster * 0.5, inner_fine);
+      Collapse(inner_fine, shells, sectors, CanonicalQuarter(inner_fine, shells), inner_hist);
+      f.inner_word = AppearanceWord(inner_hist, projection, bits);
+    }
     if (options.change_words) {
       if (!same_change) FineHistogram(buckets, ip.p.x, ip.p.y, kChangeRadiusM, 10, raster * 0.5, change_fine);
       const std::vector<double>& cf = same_change ? fine : change_fine;

@@ -61,14 +61,24 @@ Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptio
     if (f.appearance_word > kMaxAppearanceWord)
       return Status::InvalidArgument("feature " + std::to_string(i) + ": appearance word " +
                                      std::to_string(f.appearance_word) + " exceeds 65535");
+    const bool inner = f.inner_word != kNoWord;
+    if (inner && (f.appearance_word >= kInnerWordTag || f.inner_word >= kInnerWordTag))
+      return Status::InvalidArgument("feature " + std::to_string(i) +
+                                     ": a feature with an inner word needs words below 32768");
     const double x = std::round(f.x * inv), y = std::round(f.y * inv);
     if (!std::isfinite(x) || !std::isfinite(y) || std::fabs(x) > 32767 || std::fabs(y) > 32767)
       return Status::InvalidArgument("feature " + std::to_string(i) +
                                      ": position is not finite or outside the pose-word range");
     out.push_back({f.appearance_word, static_cast<int16_t>(x), static_cast<int16_t>(y)});
+    if (inner) out.push_back({f.inner_word | kInnerWordTag, static_cast<int16_t>(x), static_cast<int16_t>(y)});
   }
   std::sort(out.begin(), out.end(), PoseFeatureLess);
   return out;
+}
+
+size_t PoseFeatureCount(const Lmd& lmd) {
+  return lmd.features.size() + static_cast<size_t>(std::count_if(lmd.features.begin(), lmd.features.end(),
+                                                                 [](const Feature& f) { return f.inner_word != kNoWord; }));
 }
 
 FloorDivider::FloorDivider(int32_t d) : d_(d) {

@@ -45,11 +45,19 @@ struct PoseFeature {
 
 // Largest appearance word the index accepts (posting keys hold 16 bits).
 inline constexpr uint32_t kMaxAppearanceWord = 0xFFFF;
+// A feature's inner word (types.h) is indexed as one more pose feature at the
+// same position, its word tagged with this bit so that it matches only inner
+// words; both words of such a feature must then be below the tag.
+inline constexpr uint32_t kInnerWordTag = 0x8000;
 
-// The Lmd's features as pose features sorted by (word, x, y). InvalidArgument
-// if a position is not finite or out of the int16 pose-word range, or a
-// word exceeds kMaxAppearanceWord.
+// The Lmd's features as pose features sorted by (word, x, y): one per
+// feature, two for a feature with an inner word. InvalidArgument if a
+// position is not finite or out of the int16 pose-word range, or a word
+// exceeds kMaxAppearanceWord (kInnerWordTag - 1 for features with an inner word).
 Result<std::vector<PoseFeature>> ToPoseFeatures(const Lmd& lmd, const IndexOptions& options);
+
+// Pose features (= postings) ToPoseFeatures makes of `lmd`.
+size_t PoseFeatureCount(const Lmd& lmd);
 
 // `features` without those whose word is in `stop_words` (sorted).
 std::vector<PoseFeature> WithoutStopWords(std::vector<PoseFeature> features, const std::vector<uint32_t>& stop_words);

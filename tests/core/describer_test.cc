@@ -32,6 +32,37 @@ TEST(DescriberTest, PaperSettingsAreTheEightOfThePaper) {
   EXPECT_EQ(PaperDescriptorSetting(0).radius_m, 1.0);
 }
 
+TEST(DescriberTest, InnerWordsDescribeTheSmallerNeighbourhood) {
+  const LocalMap map = ToyMap();
+  const Frame frame = PlanViewpoint(map);
+  const DescriberOptions product = ProductDescriberOptions();
+  ASSERT_GT(product.inner_radius_m, 0.0);
+  const Lmd with = Describe(map, frame, product);
+  DescriberOptions none = product;
+  none.inner_radius_m = 0.0;
+  const Lmd without = Describe(map, frame, none);
+  ASSERT_GT(with.features.size(), 20u);
+  ASSERT_EQ(with.features.size(), without.features.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < with.features.size(); ++i) {
+    // Same interest points and outer words; the inner word is extra.
+    EXPECT_EQ(with.features[i].appearance_word, without.features[i].appearance_word);
+    EXPECT_EQ(with.features[i].x, without.features[i].x);
+    EXPECT_EQ(without.features[i].inner_word, kNoWord);
+    ASSERT_NE(with.features[i].inner_word, kNoWord);
+    EXPECT_LT(with.features[i].inner_word, 1u << product.word_bits);
+    differ += with.features[i].inner_word != with.features[i].appearance_word;
+  }
+  EXPECT_GT(differ, with.features.size() / 2);  // a 3 m context is not the 6 m one
+  // An inner radius not below R, or words too wide to tag, give none.
+  DescriberOptions wide = product;
+  wide.inner_radius_m = product.setting.radius_m;
+  EXPECT_EQ(Describe(map, frame, wide).features[0].inner_word, kNoWord);
+  DescriberOptions bits16 = product;
+  bits16.word_bits = 16;
+  EXPECT_EQ(Describe(map, frame, bits16).features[0].inner_word, kNoWord);
+}
+
 TEST(DescriberTest, IdenticalInputGivesIdenticalDescriptor) {
   const LocalMap map = ToyMap();
   const Frame frame = PlanViewpoint(map);
@@ -44,6 +75,9 @@ TEST(DescriberTest, IdenticalInputGivesIdenticalDescriptor) {
     EXPECT_EQ(a.features[i].x, b.features[i].x);
   }
   EXPECT_EQ(a.frame.origin.x, frame.origin.x);
+  const Lmd c = Describe(map, frame, ProductDescriberOptions()), d = Describe(map, frame, ProductDescriberOptions());
+  ASSERT_EQ(c.features.size(), d.features.size());
+  for (size_t i = 0; i < c.features.size(); ++i) EXPECT_EQ(c.features[i].inner_word, d.features[i].inner_word);
 }
 
 TEST(DescriberTest, WordsUseTheirBitWidthsAndDiffer) {

@@ -40,6 +40,29 @@ TEST(LmdCodecTest, RoundTripKeepsFrameWordsAndQuantisedPositions) {
   EXPECT_EQ(EncodeLmd(*back), bytes);  // stable once quantised
 }
 
+TEST(LmdCodecTest, InnerWordsRoundTripInVersionTwo) {
+  Lmd lmd = Sample();
+  for (size_t i = 0; i < lmd.features.size(); ++i) {
+    if (i % 5 != 0) lmd.features[i].inner_word = static_cast<uint32_t>((i * 977) & 0x7fff);  // every 5th: none
+  }
+  const std::string bytes = EncodeLmd(lmd);
+  EXPECT_EQ(bytes[0], 2);
+  EXPECT_EQ(bytes.size(), 1 + 1 + 12 + 16 * lmd.features.size());
+  const Result<Lmd> back = DecodeLmd(bytes);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  ASSERT_EQ(back->features.size(), lmd.features.size());
+  for (size_t i = 0; i < lmd.features.size(); ++i) {
+    EXPECT_EQ(back->features[i].inner_word, lmd.features[i].inner_word) << i;
+    EXPECT_EQ(back->features[i].appearance_word, lmd.features[i].appearance_word) << i;
+    EXPECT_EQ(back->features[i].change_word, lmd.features[i].change_word) << i;
+  }
+  EXPECT_EQ(EncodeLmd(*back), bytes);
+  // Without inner words the record stays version 1 and decodes to "none".
+  const std::string v1 = EncodeLmd(Sample());
+  EXPECT_EQ(v1[0], 1);
+  EXPECT_EQ(DecodeLmd(v1)->features[0].inner_word, kNoWord);
+}
+
 TEST(LmdCodecTest, EmptyDescriptorRoundTrips) {
   const Result<Lmd> back = DecodeLmd(EncodeLmd(Lmd{}));
   ASSERT_TRUE(back.ok());
@@ -52,9 +75,12 @@ TEST(LmdCodecTest, RejectsTruncationTrailingBytesAndWrongVersion) {
     EXPECT_EQ(DecodeLmd(bytes.substr(0, n)).status().code(), Status::Code::kCorruption) << n;
   }
   EXPECT_EQ(DecodeLmd(bytes + "x").status().code(), Status::Code::kCorruption);
-  std::string v2 = bytes;
+  std::string v2 = bytes;  // version 1 bytes read as version 2: 16 bytes per feature
   v2[0] = 2;
   EXPECT_EQ(DecodeLmd(v2).status().code(), Status::Code::kCorruption);
+  std::string v3 = bytes;
+  v3[0] = 3;
+  EXPECT_EQ(DecodeLmd(v3).status().code(), Status::Code::kCorruption);
   std::string huge = bytes.substr(0, 1) + std::string("\xff\xff\xff\xff\xff\xff\xff\xff\x7f", 9) + bytes.substr(2);
   EXPECT_EQ(DecodeLmd(huge).status().code(), Status::Code::kCorruption);
 }

@@ -115,6 +115,34 @@ TEST(PyramidKernelTest, OrientationMaskScoresOnlyTheChosenOrientations) {
   EXPECT_EQ(ScoreLmdMap(q, d.data(), d.size(), &scratch, 0u).score, 0.0);
 }
 
+TEST(PyramidKernelTest, InnerWordsAreTaggedPoseFeaturesThatMatchOnlyInnerWords) {
+  IndexOptions io;
+  RetrieveOptions ro;
+  KernelScratch scratch;
+  Lmd query, inner_match, outer_only;
+  query.features = {{7, 1.0f, 1.0f, 0, 21}, {9, 2.0f, 0.5f, 0}};
+  // Word 21 as an inner word at the same place: a match. Word 21 as an outer
+  // word (and 7 as an inner word): no match, the tag keeps the two apart.
+  inner_match.features = {{300, 1.0f, 1.0f, 0, 21}};
+  outer_only.features = {{21, 1.0f, 1.0f, 0, 7}};
+  EXPECT_EQ(PoseFeatureCount(query), 3u);
+  const std::vector<PoseFeature> qf = *ToPoseFeatures(query, io);
+  ASSERT_EQ(qf.size(), 3u);
+  EXPECT_EQ(qf.back().word, 21u | kInnerWordTag);  // sorted by word: the tagged one last
+  EXPECT_EQ(qf.back().x, qf.front().x);
+  const PreparedLmdQuery q = PrepareLmdQuery(qf, io, ro);
+  const auto a = *ToPoseFeatures(inner_match, io);
+  const auto b = *ToPoseFeatures(outer_only, io);
+  EXPECT_GT(ScoreLmdMap(q, a.data(), a.size(), &scratch).score, 0.0);
+  EXPECT_EQ(ScoreLmdMap(q, b.data(), b.size(), &scratch).score, 0.0);
+  // Words at or above the tag cannot carry an inner word.
+  Lmd wide;
+  wide.features = {{kInnerWordTag, 0.0f, 0.0f, 0, 1}};
+  EXPECT_EQ(ToPoseFeatures(wide, io).status().code(), Status::Code::kInvalidArgument);
+  wide.features = {{1, 0.0f, 0.0f, 0, kInnerWordTag}};
+  EXPECT_EQ(ToPoseFeatures(wide, io).status().code(), Status::Code::kInvalidArgument);
+}
+
 TEST(PyramidKernelTest, LevelZeroIsOneCellNotTheWholeMap) {
   // Same word 6 m apart after alignment: different 5 m cells, so no match
   // at any level; 1 m apart inside one 5 m cell: level 0 only.
