@@ -1,21 +1,23 @@
 // lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]
 //                 [--top-k K] [--max-offset M] [--method lmd|bow]
-//                 [--max-word-share F] [--setting S] [--bits B] [--cache FILE]
+//                 [--max-word-share F] [--setting S] [--bits B] [--inner M] [--cache FILE]
 // Builds an index of N simulated local maps (simulator -> planner ->
 // describer), runs Q queries through the inverted file and the exhaustive
 // scorer in the same process, and reports p50 latencies, their ratio, whether
 // every top-K agreed (ids, scores, orientations, offsets, ranks) and bytes per
 // stored map (encoded Lmd + posting records). With --json the last stdout line
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
-// "bytes_per_map": z}. --setting and --bits choose the descriptor (default:
-// the product's, ProductDescriberOptions: #6 with 13-bit words). Progress
+// "bytes_per_map": z}. --setting, --bits and --inner (inner words' radius, m;
+// 0 = none) choose the descriptor (default: the product's,
+// ProductDescriberOptions: #6 with 13-bit words and 3 m inner words). Progress
 // goes to stderr. --cache FILE keeps the described maps and queries (encoded
 // Lmds) so that runs with other retrieval options skip the simulator and the
-// describer (reused only if N, Q, the seed, the setting and the bits match).
+// describer (reused only if N, Q, the seed, the setting, the bits and the inner radius match).
 #include "bench/bench/index_bench.h"
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +30,7 @@
 #include <time.h>
 
 #include "bench/bench/sim_descriptors.h"
+#include "core/describe/describer.h"
 #include "core/describe/lmd_codec.h"
 #include "core/index/exhaustive.h"
 #include "core/index/index.h"
@@ -45,6 +48,7 @@ struct Args {
   int threads = 0;
   int setting = 6;  // the paper's descriptor setting #1..#8 (product default: #6)
   int bits = 13;    // appearance word bits B (product default: 13)
+  double inner_m = ProductDescriberOptions().inner_radius_m;  // inner words' radius, 0 = none
   std::string cache;
   RetrieveOptions retrieve;
 };
@@ -53,7 +57,8 @@ void Usage() {
   std::fprintf(stderr,
                "usage: lmd-bench index --maps N [--queries Q] [--json] [--seed S] [--threads T]\n"
                "                       [--top-k K] [--max-offset M] [--method lmd|bow]\n"
-               "                       [--max-word-share F] [--setting 1..8] [--bits B] [--cache FILE]\n");
+               "                       [--max-word-share F] [--setting 1..8] [--bits B] [--inner M]\n"
+               "                       [--cache FILE]\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
@@ -107,6 +112,9 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--bits") {
       if (!number("--bits", 1, 16, &x)) return false;
       args->bits = static_cast<int>(x);
+    } else if (a == "--inner") {
+      if (!number("--inner", 0, 12, &x)) return false;
+      args->inner_m = x;
     } else if (a == "--cache") {
       const char* v = value("--cache");
       if (v == nullptr) return false;
@@ -134,20 +142,23 @@ bool ParseArgs(int argc, char** argv, Args* args) {
   return true;
 }
 
-// Cache file: "lmdbench2" N Q seed setting bits, then per set (maps, queries)
+// Cache file: "lmdbench3" N Q seed setting bits inner-radius-mm, then per set (maps, queries)
 // its count and per Lmd a length and its EncodeLmd bytes, then the query
 // sources; every number a native-order u64.
 void PutU64(std::ofstream& out, uint64_t v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); }
 bool GetU64(std::ifstream& in, uint64_t* v) { return static_cast<bool>(in.read(reinterpret_cast<char*>(v), sizeof(*v))); }
 
+uint64_t InnerMm(const Args& args) { return static_cast<uint64_t>(std::llround(args.inner_m * 1000)); }
+
 bool LoadCache(const std::string& path, const Args& args, SimDescriptors* data) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   char magic[9] = {};
-  uint64_t n = 0, q = 0, seed = 0, setting = 0, bits = 0;
-  if (!in.read(magic, 9) || std::memcmp(magic, "lmdbench2", 9) != 0 || !GetU64(in, &n) || !GetU64(in, &q) ||
-      !GetU64(in, &seed) || !GetU64(in, &setting) || !GetU64(in, &bits) || n != args.maps || q != args.queries || seed != args.seed ||
-      setting != static_cast<uint64_t>(args.setting) || bits != static_cast<uint64_t>(args.bits))
+  uint64_t n = 0, q = 0, seed = 0, setting = 0, bits = 0, inner_mm = 0;
+  if (!in.read(magic, 9) || std::memcmp(magic, "lmdbench3", 9) != 0 || !GetU64(in, &n) || !GetU64(in, &q) ||
+      !GetU64(in, &seed) || !GetU64(in, &setting) || !GetU64(in, &bits) || !GetU64(in, &inner_mm) ||
+      n != args.maps || q != args.queries || seed != args.seed || setting != static_cast<uint64_t>(args.setting) ||
+      bits != static_cast<uint64_t>(args.bits) || inner_mm != InnerMm(args))
     return false;
   auto read_lmds = [&](uint64_t count, std::vector<Lmd>* out) {
     for (uint64_t k = 0; k < count; ++k) {
@@ -175,12 +186,13 @@ bool LoadCache(const std::string& path, const Args& args, SimDescriptors* data) 
 
 void SaveCache(const std::string& path, const Args& args, const SimDescriptors& data) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write("lmdbench2", 9);
+  out.write("lmdbench3", 9);
   PutU64(out, args.maps);
   PutU64(out, args.queries);
   PutU64(out, args.seed);
   PutU64(out, static_cast<uint64_t>(args.setting));
   PutU64(out, static_cast<uint64_t>(args.bits));
+  PutU64(out, InnerMm(args));
   for (const std::vector<Lmd>* set : {&data.maps, &data.queries}) {
     PutU64(out, set->size());
     for (const Lmd& lmd : *set) {
@@ -234,8 +246,10 @@ int RunIndexBench(int argc, char** argv) {
   sim.queries = args.queries;
   sim.seed = args.seed;
   sim.threads = args.threads;
+  sim.describer = ProductDescriberOptions();
   sim.describer.setting = PaperDescriptorSetting(args.setting);
   sim.describer.word_bits = args.bits;
+  sim.describer.inner_radius_m = args.inner_m;
   SimDescriptors data;
   const bool cached = !args.cache.empty() && LoadCache(args.cache, args, &data);
   if (cached) {

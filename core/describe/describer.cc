@@ -207,6 +207,7 @@ DescriberOptions ProductDescriberOptions() {
   options.setting = PaperDescriptorSetting(6);
   options.word_bits = 13;
   options.inner_radius_m = 3.0;
+  options.max_features = 64;  // two words each: a stored map stays under 2 KB with its postings
   return options;
 }
 

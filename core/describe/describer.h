@@ -83,7 +83,8 @@ struct DescriberOptions {
 // different parts of it; the 3 m inner word of the same point often still
 // matches. Measured: the right place among the first stage's top 20 for 83 %
 // -> 87 % of the queries (all logs, seed 2; seed 1: 81 % -> 86 %), best
-// place@1 0.79 -> 0.82 (docs/results.md).
+// place@1 0.79 -> 0.82 (docs/results.md). With inner words the cap is 64
+// features (place@1 0.81; 128 postings per map instead of 80).
 DescriberOptions ProductDescriberOptions();
 
 // Describes `map` in `frame` (usually PlanViewpoint(map)). Features sorted by
