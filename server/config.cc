@@ -93,6 +93,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
     return Status::Ok();
   }
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
+  if (key == "inner_words") return SetBool(key, value, &config->inner_words);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
   return Status::InvalidArgument("unknown setting '" + key + "'");
 }

@@ -8,13 +8,22 @@ Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config) {
   return Describe(map, PlanViewpoint(map, config.viewpoint), config.describer);
 }
 
+IndexingConfig ProductIndexing(bool inner_words) {
+  IndexingConfig config;
+  if (!inner_words) {
+    config.describer.inner_radius_m = 0.0;
+    config.describer.max_features = 80;
+  }
+  return config;
+}
+
 std::string Fingerprint(const IndexingConfig& config) {
   const DescriberOptions& d = config.describer;
   std::ostringstream out;
   out << "planner=" << PlannerName(config.viewpoint.planner) << " projection_version=" << kProjectionVersion
       << " projection_seed=" << d.projection_seed << " R=" << d.setting.radius_m << " A=" << d.setting.sectors
       << " shells=" << d.shells << " bits=" << d.word_bits << " raster=" << d.raster_m
-      << " interest_cell=" << d.interest_cell_m << " max_features=" << d.max_features
+      << " interest_cell=" << d.interest_cell_m << " max_features=" << d.max_features << " inner=" << d.inner_radius_m
       << " codec=" << kLmdCodecVersion << " pose_quantum=" << config.index.pose_quantum_m
       << " W=" << config.index.pyramid_cell_m << " L=" << config.index.pyramid_levels;
   return out.str();

@@ -15,6 +15,7 @@
 #include "server/auth.h"
 #include "server/call_runner.h"
 #include "server/lmd_service.h"
+#include "server/indexing.h"
 #include "server/map_store.h"
 #include "server/metrics.h"
 #include "server/metrics_http.h"
@@ -79,6 +80,7 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   MapStoreOptions store_options;
   store_options.data_dir = config.data_dir;
   store_options.sync_writes = config.sync_writes;
+  store_options.indexing = ProductIndexing(config.inner_words);
   Result<std::unique_ptr<MapStore>> store = MapStore::Open(store_options);
   if (!store.ok()) return store.status();
   server->store_ = std::move(store).value();

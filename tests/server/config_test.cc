@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/indexing.h"
 #include "tests/server/test_server.h"
 
 namespace lmd::server {
@@ -33,6 +34,20 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_FALSE(SetConfigValue("max_top_k", "ten", &config).ok());
   EXPECT_FALSE(SetConfigValue("sync_writes", "maybe", &config).ok());
   EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);
+}
+
+TEST(ConfigTest, InnerWordsChooseTheStoresDescriptor) {
+  ServerConfig config;
+  EXPECT_TRUE(config.inner_words);
+  ASSERT_TRUE(SetConfigValue("inner_words", "false", &config).ok());
+  EXPECT_FALSE(config.inner_words);
+  EXPECT_FALSE(SetConfigValue("inner_words", "sometimes", &config).ok());
+  const IndexingConfig with = ProductIndexing(true), without = ProductIndexing(false);
+  EXPECT_GT(with.describer.inner_radius_m, 0.0);
+  EXPECT_EQ(without.describer.inner_radius_m, 0.0);
+  EXPECT_EQ(without.describer.max_features, 80);
+  // A store made with one is refused by an lmdd set to the other.
+  EXPECT_NE(Fingerprint(with), Fingerprint(without));
 }
 
 TEST(ConfigTest, LoopbackAddressesAreRecognised) {
