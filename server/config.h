@@ -74,13 +74,13 @@ struct ServerConfig {
   // metres off on real logs: 3 m gave +0.05 place recall@1 over 0.5 m
   // (lmd-eval retrieval ablation). The paper methods keep the index default.
   double default_max_offset_m = 3.0;
-  // Index each feature with its 3 m inner word too (core/describe/describer.h;
-  // 64 features per map). false: one word per feature, 80 features (the
-  // descriptor of before). Fixed when a store is created (a store made with
-  // the other setting is refused). Measured: lmd-eval best's ANR 15.2 % vs
-  // 18.2 %, place recall@5 0.84 vs 0.83, @1 0.79 vs 0.79 (full runs); the
-  // retrieval step costs about 2.7x more CPU (lmd-microbench, demo world).
-  bool inner_words = true;
+  // true: index each feature with its 3 m inner word too, 64 features per
+  // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
+  // when a store is created (a store made with the other setting is refused).
+  // Measured: lmd-eval best's ANR 15.2 % vs 18.2 %, place recall@5 0.84 vs
+  // 0.83, @1 0.79 vs 0.79 (full runs); lmd-bench load at 80 robots: lmdd CPU
+  // 25 vs 14.4 ms per robot-second, p99 875 vs 25 ms (saturated).
+  bool inner_words = false;
   // Prepared db maps kept for verification (100-200 KB each).
   uint32_t prepared_map_cache_entries = 500;
 

@@ -10,10 +10,7 @@ Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config) {
 
 IndexingConfig ProductIndexing(bool inner_words) {
   IndexingConfig config;
-  if (!inner_words) {
-    config.describer.inner_radius_m = 0.0;
-    config.describer.max_features = 80;
-  }
+  if (inner_words) config.describer = WithInnerWords(config.describer);
   return config;
 }
 

@@ -16,12 +16,11 @@ namespace lmd::server {
 
 struct IndexingConfig {
   ViewpointOptions viewpoint;  // planner: the product default
-  DescriberOptions describer = ProductDescriberOptions();  // paper setting #6, 13-bit words, inner words
+  DescriberOptions describer = ProductDescriberOptions();  // paper setting #6, 13-bit words
   IndexOptions index;          // W = 5 m, L = 2
 };
 
-// The product's indexing; without inner words, the product descriptor of
-// before them (80 features, one word each: ServerConfig::inner_words).
+// The product's indexing, with or without inner words (ServerConfig::inner_words).
 IndexingConfig ProductIndexing(bool inner_words);
 
 // The planned frame and descriptor of `map` (in its own frame).

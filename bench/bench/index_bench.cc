@@ -7,9 +7,9 @@
 // every top-K agreed (ids, scores, orientations, offsets, ranks) and bytes per
 // stored map (encoded Lmd + posting records). With --json the last stdout line
 // is {"maps": N, "indexed_ms_p50": x, "exhaustive_ms_p50": y, "top10_agree": b,
-// "bytes_per_map": z}. --setting, --bits and --inner (inner words' radius, m;
-// 0 = none) choose the descriptor (default: the product's,
-// ProductDescriberOptions: #6 with 13-bit words and 3 m inner words). Progress
+// "bytes_per_map": z}. --setting, --bits and --inner (inner words' radius, m,
+// with WithInnerWords' feature cap; 0 = none) choose the descriptor (default:
+// the product's, ProductDescriberOptions: #6 with 13-bit words). Progress
 // goes to stderr. --cache FILE keeps the described maps and queries (encoded
 // Lmds) so that runs with other retrieval options skip the simulator and the
 // describer (reused only if N, Q, the seed, the setting, the bits and the inner radius match).
@@ -48,7 +48,7 @@ struct Args {
   int threads = 0;
   int setting = 6;  // the paper's descriptor setting #1..#8 (product default: #6)
   int bits = 13;    // appearance word bits B (product default: 13)
-  double inner_m = ProductDescriberOptions().inner_radius_m;  // inner words' radius, 0 = none
+  double inner_m = 0.0;  // inner words' radius (m, WithInnerWords' feature cap), 0 = none
   std::string cache;
   RetrieveOptions retrieve;
 };
@@ -249,7 +249,10 @@ int RunIndexBench(int argc, char** argv) {
   sim.describer = ProductDescriberOptions();
   sim.describer.setting = PaperDescriptorSetting(args.setting);
   sim.describer.word_bits = args.bits;
-  sim.describer.inner_radius_m = args.inner_m;
+  if (args.inner_m > 0) {
+    sim.describer = WithInnerWords(sim.describer);
+    sim.describer.inner_radius_m = args.inner_m;
+  }
   SimDescriptors data;
   const bool cached = !args.cache.empty() && LoadCache(args.cache, args, &data);
   if (cached) {

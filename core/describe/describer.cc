@@ -206,8 +206,12 @@ DescriberOptions ProductDescriberOptions() {
   DescriberOptions options;
   options.setting = PaperDescriptorSetting(6);
   options.word_bits = 13;
+  return options;
+}
+
+DescriberOptions WithInnerWords(DescriberOptions options) {
   options.inner_radius_m = 3.0;
-  options.max_features = 64;  // two words each: a stored map stays under 2 KB with its postings
+  options.max_features = 64;
   return options;
 }
 

@@ -70,8 +70,8 @@ struct DescriberOptions {
   double inner_radius_m = 0.0;
 };
 
-// The product default (lmdd, lmd-bench, lmd-eval "best"): paper setting #6
-// (R = 6 m, A = 6) with 13-bit words and 3 m inner words. Setting #1's 10-dimensional radial
+// The product default (lmdd, lmd-bench; lmd-eval "best" adds inner words):
+// paper setting #6 (R = 6 m, A = 6) with 13-bit words. Setting #1's 10-dimensional radial
 // profile gives every straight wall the same word (47 % of all features on
 // simulated buildings), so every stored map shares words with every query and
 // no inverted file can skip any; #6 with 13 bits spreads features over ~4000
@@ -79,13 +79,17 @@ struct DescriberOptions {
 // real logs. Measured: lmd-bench index, 10k maps, the inverted file 1.0x ->
 // 7x faster than exhaustive; lmd-eval retrieval, six logs not used for tuning
 // (seed 2, 40 queries each), best place@1 0.63 -> 0.67 (docs/results.md).
-// A 6 m context differs between two maps of one place when they saw
-// different parts of it; the 3 m inner word of the same point often still
-// matches. Measured: the right place among the first stage's top 20 for 83 %
-// -> 87 % of the queries (all logs, seed 2; seed 1: 81 % -> 86 %), best
-// place@1 0.79 -> 0.82 (docs/results.md). With inner words the cap is 64
-// features (place@1 0.81; 128 postings per map instead of 80).
 DescriberOptions ProductDescriberOptions();
+
+// `options` with 3 m inner words and at most 64 features (two words each, so
+// that a stored map stays under 2 KB with its postings): lmd-eval's best, and
+// lmdd with inner_words = true. A 6 m context differs between two maps of
+// one place when they saw different parts of it; the 3 m word of the same
+// point often still matches. Measured (docs/results.md): the first stage's
+// ANR 18.2 % -> 15.2 % and best's place@5 0.83 -> 0.84 (full run), at about
+// 1.7x lmdd's CPU per query (retrieval 2.7x), which is why lmdd's default
+// stays without them.
+DescriberOptions WithInnerWords(DescriberOptions options);
 
 // Describes `map` in `frame` (usually PlanViewpoint(map)). Features sorted by
 // (y, x) of their interest cell; deterministic. An empty map gives an Lmd

@@ -35,7 +35,7 @@ TEST(DescriberTest, PaperSettingsAreTheEightOfThePaper) {
 TEST(DescriberTest, InnerWordsDescribeTheSmallerNeighbourhood) {
   const LocalMap map = ToyMap();
   const Frame frame = PlanViewpoint(map);
-  const DescriberOptions product = ProductDescriberOptions();
+  const DescriberOptions product = WithInnerWords(ProductDescriberOptions());
   ASSERT_GT(product.inner_radius_m, 0.0);
   const Lmd with = Describe(map, frame, product);
   DescriberOptions none = product;
@@ -75,7 +75,8 @@ TEST(DescriberTest, IdenticalInputGivesIdenticalDescriptor) {
     EXPECT_EQ(a.features[i].x, b.features[i].x);
   }
   EXPECT_EQ(a.frame.origin.x, frame.origin.x);
-  const Lmd c = Describe(map, frame, ProductDescriberOptions()), d = Describe(map, frame, ProductDescriberOptions());
+  const DescriberOptions inner = WithInnerWords(ProductDescriberOptions());
+  const Lmd c = Describe(map, frame, inner), d = Describe(map, frame, inner);
   ASSERT_EQ(c.features.size(), d.features.size());
   for (size_t i = 0; i < c.features.size(); ++i) EXPECT_EQ(c.features[i].inner_word, d.features[i].inner_word);
 }

@@ -38,14 +38,15 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
 
 TEST(ConfigTest, InnerWordsChooseTheStoresDescriptor) {
   ServerConfig config;
-  EXPECT_TRUE(config.inner_words);
-  ASSERT_TRUE(SetConfigValue("inner_words", "false", &config).ok());
   EXPECT_FALSE(config.inner_words);
+  ASSERT_TRUE(SetConfigValue("inner_words", "true", &config).ok());
+  EXPECT_TRUE(config.inner_words);
   EXPECT_FALSE(SetConfigValue("inner_words", "sometimes", &config).ok());
   const IndexingConfig with = ProductIndexing(true), without = ProductIndexing(false);
   EXPECT_GT(with.describer.inner_radius_m, 0.0);
   EXPECT_EQ(without.describer.inner_radius_m, 0.0);
-  EXPECT_EQ(without.describer.max_features, 80);
+  EXPECT_EQ(without.describer.max_features, ProductDescriberOptions().max_features);
+  EXPECT_EQ(with.describer.max_features, 64);
   // A store made with one is refused by an lmdd set to the other.
   EXPECT_NE(Fingerprint(with), Fingerprint(without));
 }
