@@ -20,8 +20,12 @@ std::string Fingerprint(const IndexingConfig& config) {
   out << "planner=" << PlannerName(config.viewpoint.planner) << " projection_version=" << kProjectionVersion
       << " projection_seed=" << d.projection_seed << " R=" << d.setting.radius_m << " A=" << d.setting.sectors
       << " shells=" << d.shells << " bits=" << d.word_bits << " raster=" << d.raster_m
-      << " interest_cell=" << d.interest_cell_m << " max_features=" << d.max_features << " inner=" << d.inner_radius_m
-      << " codec=" << kLmdCodecVersion << " pose_quantum=" << config.index.pose_quantum_m
+      << " interest_cell=" << d.interest_cell_m << " max_features=" << d.max_features;
+  // Without inner words the line is the one of stores made before them
+  // (codec version 1), so that those stores still open.
+  const bool inner = d.inner_radius_m > 0;
+  if (inner) out << " inner=" << d.inner_radius_m;
+  out << " codec=" << (inner ? 2 : 1) << " pose_quantum=" << config.index.pose_quantum_m
       << " W=" << config.index.pyramid_cell_m << " L=" << config.index.pyramid_levels;
   return out.str();
 }

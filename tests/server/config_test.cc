@@ -49,6 +49,10 @@ TEST(ConfigTest, InnerWordsChooseTheStoresDescriptor) {
   EXPECT_EQ(with.describer.max_features, 64);
   // A store made with one is refused by an lmdd set to the other.
   EXPECT_NE(Fingerprint(with), Fingerprint(without));
+  // Stores made before inner words existed carry this line: they still open.
+  EXPECT_EQ(Fingerprint(without),
+            "planner=cog projection_version=2 projection_seed=30519575635455850 R=6 A=6 shells=10 bits=13 "
+            "raster=0.01 interest_cell=0.5 max_features=80 codec=1 pose_quantum=0.05 W=5 L=2");
 }
 
 TEST(ConfigTest, LoopbackAddressesAreRecognised) {

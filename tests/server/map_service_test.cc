@@ -65,6 +65,24 @@ TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
   EXPECT_EQ(collections.collections(0).points(), 12u);
 }
 
+TEST_F(MapServiceTest, AStoreWithInnerWordsSurvivesARestart) {
+  server::ServerConfig config;
+  config.inner_words = true;  // two postings per feature: the recovery check must count both
+  {
+    TestServer server(dir_.path(), config);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap(60)), &inserted).ok());
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap(80)), &inserted).ok());  // replaced
+  }
+  TestServer restarted(dir_.path(), config);
+  ASSERT_TRUE(restarted.ok());
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(restarted.client().ListCollections(&collections).ok());
+  ASSERT_EQ(collections.collections_size(), 1);
+  EXPECT_EQ(collections.collections(0).maps(), 1u);
+  EXPECT_GT(collections.collections(0).postings(), 0u);
+}
+
 TEST_F(MapServiceTest, ReplacingAMapKeepsCountsRight) {
   TestServer server(dir_.path());
   v1::InsertMapsResponse ignored;
