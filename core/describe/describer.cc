@@ -237,7 +237,8 @@ Lmd Describe(const LocalMap& map, const Frame& frame, const DescriberOptions& op
   for (size_t i = 0; i < q.size(); ++i) {
     keys[i] = {static_cast<int64_t>(std::floor(q[i].x / raster)), static_cast<int64_t>(std::floor(q[i].y / raster))};
   }
-  const double inner_radius = bits <= 15 && options.inner_radius_m < radius ? std::max(options.inner_radius_m, 0.0) : 0.0;
+  const double inner_radius =
+      bits <= 15 && options.inner_radius_m < radius ? std::max(options.inner_radius_m, 0.0) : 0.0;
   const double max_radius = options.change_words ? std::max(radius, kChangeRadiusM) : radius;
   const PointBuckets buckets(std::move(keys), raster, std::max(1.0, max_radius / 4));
 
