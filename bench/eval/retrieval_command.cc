@@ -146,7 +146,7 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.verify_top_n = 20;
   v.push_back(a);
   a = ablation("abl_no_inner", "no inner words, 80 features (lmdd's default descriptor)");
-  a.inner_radius_m = 0.0, a.max_features = 80;
+  a.inner_radius_m = 0.0, a.max_features = ProductDescriberOptions().max_features;
   v.push_back(a);
   a = ablation("abl_desc1_10bit",
                 "descriptor #1 (R=1, A=1) with 10-bit words (the paper's) instead of #6 with 13 bits and inner words");
