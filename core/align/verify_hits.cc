@@ -13,30 +13,35 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
   hits.reserve(candidates.size());
   const size_t n_verify = options.max_candidates ? std::min(options.max_candidates, candidates.size())
                                                  : candidates.size();
-  bool matched = false;  // a candidate reached matched_score near its guesses
+  size_t matches = 0;  // candidates that reached matched_score near their guesses
+  std::vector<std::shared_ptr<const PreparedMap>> dbs(candidates.size());
   for (size_t i = 0; i < candidates.size(); ++i) {
     const HitCandidate& c = candidates[i];
     VerifiedHit h;
     h.map_id = c.map_id;
     h.retrieval_score = c.retrieval_score;
     h.retrieval_rank = i;
-    h.verified = i < n_verify;
+    h.verified = i < n_verify && (options.enough_matches == 0 || matches < options.enough_matches);
+    if (h.verified) {
+      dbs[i] = c.db ? c.db : c.prepare ? c.prepare() : nullptr;
+      h.db = dbs[i];
+    }
     if (h.verified && !c.guesses.empty()) {
       h.match.pose = c.guesses[0];
-      if (c.db) {
-        h.match = MatchLocalMaps(query, *c.db, c.guesses, options.match);
+      if (dbs[i]) {
+        h.match = MatchLocalMaps(query, *dbs[i], c.guesses, options.match);
         h.score = score_of(h.match);
-        matched = matched || h.score >= options.matched_score;
+        if (h.score >= options.matched_score) ++matches;
       }
     }
     hits.push_back(h);
   }
-  if (options.global_search && !matched) {
+  if (options.global_search && matches == 0) {
     for (size_t i = 0; i < n_verify; ++i) {
       const HitCandidate& c = candidates[i];
       VerifiedHit& h = hits[i];
-      if (!c.db || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
-      const ScanMatch global = MatchLocalMapsGlobal(query, *c.db, options.match);
+      if (!dbs[i] || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
+      const ScanMatch global = MatchLocalMapsGlobal(query, *dbs[i], options.match);
       if (c.guesses.empty() || score_of(global) > h.score) {
         h.match = global;
         h.score = score_of(global);

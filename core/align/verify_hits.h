@@ -12,13 +12,17 @@
 // Verification score = overlap score - conflict_weight * conflict
 // fraction (query points the db map saw as free space): a wrong place that
 // shares walls with the query usually also puts walls in its free space.
+// Candidates are verified in input order; once enough_matches of them reached
+// matched_score, the rest are not verified (in a store that holds many maps
+// of the query's place, the first few confirm it and the others add little).
 // Candidates are then ordered by verification score (descending), exact ties
-// by retrieval score (descending), then by input order; candidates beyond
-// max_candidates follow, unverified, in input order.
+// by retrieval score (descending), then by input order; candidates not
+// verified (beyond max_candidates or after enough matches) follow in input order.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -30,9 +34,12 @@ namespace lmd {
 
 struct HitCandidate {
   uint64_t map_id = 0;
-  std::shared_ptr<const PreparedMap> db;  // prepared db map; null = scores 0
+  std::shared_ptr<const PreparedMap> db;  // prepared db map; null = scores 0 (unless `prepare` gives one)
   double retrieval_score = 0.0;           // the index's score (tie-breaker)
   std::vector<Pose2> guesses;             // query own frame in db own frame; may be empty
+  // When db is null: called once if the candidate is verified, so that only
+  // verified candidates pay for preparing their map; may return null.
+  std::function<std::shared_ptr<const PreparedMap>()> prepare;
 };
 
 struct VerifyOptions {
@@ -49,6 +56,7 @@ struct VerifyOptions {
   // all three logs (0.08 / 0.03 / -0.03 with the overlap alone -> 0.21 / 0.06 / 0.06).
   double conflict_weight = 2.0;
   size_t max_candidates = 0;         // verify only the first N candidates (0 = all); the rest follow unverified
+  size_t enough_matches = 0;         // stop verifying once N candidates reached matched_score (0 = never)
 };
 
 struct VerifiedHit {
@@ -58,6 +66,7 @@ struct VerifiedHit {
   bool verified = false;      // false when beyond max_candidates
   double score = 0.0;         // verification score (see policy); 0 if unverified or unmatchable
   ScanMatch match;            // pose (query own frame in db own frame), overlap, conflicts
+  std::shared_ptr<const PreparedMap> db;  // the db map as matched (verified only; may be null)
 };
 
 // Candidates re-ordered as described above; never fails (degenerate maps score 0).

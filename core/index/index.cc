@@ -192,10 +192,11 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
   const PreparedLmdQuery q =
       PrepareLmdQuery(WithoutStopWords(std::move(features).value(), StopWords(options.max_word_share)), options_, options);
   if (options.method == Method::kBow) return RetrieveBow(q, options.top_k, stats);
-  return RetrieveLmd(q, options.top_k, stats);
+  return RetrieveLmd(q, options.top_k, options.max_maps_scored, stats);
 }
 
-std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const {
+std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored,
+                                       RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.bounds.size() < slot_id_.size() * 4) sc.bounds.resize(slot_id_.size() * 4, 0);
   sc.touched.clear();
@@ -389,6 +390,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   while (!heap.empty()) {
     const Candidate next = heap.front();
     if (top.full() && next.bound < top.kth_score()) break;
+    if (max_scored != 0 && stats->maps_scored == max_scored) break;
     std::pop_heap(heap.begin(), heap.end(), lower);
     heap.pop_back();
     ++stats->maps_scored;

@@ -16,7 +16,7 @@
 // and a few words on most features (a "wall" word) make every map a close
 // candidate. `lmd-bench index` reports both (postings read, maps scored).
 //
-// Retrieval is exact. Pass 1 reads, once per distinct query word, the lists
+// Retrieval is exact (by default). Pass 1 reads, once per distinct query word, the lists
 // of the level-0 cells that meet any of that word's boxes (4 orientations x
 // the query features with the word) and gives every map an upper bound of its
 // raw K per orientation. A query feature counts in K through the one level-0
@@ -32,7 +32,8 @@
 // Pass 2 scores maps exactly, best bound first, with the same ScoreLmdMap as
 // the exhaustive scorer, until the next bound is below the k-th best score.
 // Scores, orientations, offsets and ranks are therefore identical to
-// RetrieveExhaustive's (tests/core/index_test.cc checks it on random data).
+// RetrieveExhaustive's (tests/core/index_test.cc checks it on random data),
+// unless RetrieveOptions::max_maps_scored stops pass 2 earlier.
 // The gains are tabulated per list and finest cell, so pass 1 costs one
 // table look-up and a few adds per posting. Lists are kept sorted by slot
 // and pass 1 reads them one block of slots at a time, so that the per-map
@@ -112,7 +113,7 @@ class Index {
 
  private:
   explicit Index(const IndexOptions& options);
-  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
+  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored, RetrieveStats* stats) const;
   std::vector<MapHit> RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
 
   static constexpr uint32_t kMaxMaps = (1u << 24) - 1;  // slots fit 24 bits

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -89,6 +90,43 @@ TEST(IndexTest, InvertedFileAndExhaustiveScorerAgreeOnRandomCollections) {
       }
     }
   }
+}
+
+// A limit on maps scored: never more scored than asked, hits a subset of the
+// exact scores (the same score for the same map), and a limit above what
+// exact retrieval scores changes nothing.
+TEST(IndexTest, MaxMapsScoredBoundsPassTwoAndScoresExactly) {
+  Collection c = MakeCollection(5, 60, 4, 15, 80);
+  Index index = MakeIndex();
+  for (size_t m = 0; m < c.maps.size(); ++m) ASSERT_TRUE(index.Add(m, c.maps[m]).ok());
+  RetrieveOptions exact;
+  exact.top_k = 10;
+  size_t limited_differs = 0;
+  for (const Lmd& q : c.queries) {
+    RetrieveStats exact_stats;
+    auto all = index.Retrieve(q, exact, &exact_stats);
+    ASSERT_TRUE(all.ok());
+    RetrieveOptions limited = exact;
+    limited.max_maps_scored = 12;
+    RetrieveStats stats;
+    auto some = index.Retrieve(q, limited, &stats);
+    ASSERT_TRUE(some.ok());
+    EXPECT_LE(stats.maps_scored, 12u);
+    auto scores = RetrieveExhaustive(index, q, [&] { RetrieveOptions o = exact; o.top_k = c.maps.size(); return o; }());
+    ASSERT_TRUE(scores.ok());
+    for (const MapHit& hit : *some) {
+      const auto same = std::find_if(scores->begin(), scores->end(), [&](const MapHit& h) { return h.map_id == hit.map_id; });
+      ASSERT_NE(same, scores->end());
+      EXPECT_EQ(same->score, hit.score);
+    }
+    limited_differs += some->size() != all->size() || !std::equal(some->begin(), some->end(), all->begin(),
+                                                                  [](const MapHit& a, const MapHit& b) { return a.map_id == b.map_id; });
+    limited.max_maps_scored = exact_stats.maps_scored;
+    auto same = index.Retrieve(q, limited);
+    ASSERT_TRUE(same.ok());
+    ExpectSameHits(*same, *all);
+  }
+  EXPECT_GT(limited_differs, 0u) << "the limit never bit: the test checks nothing";
 }
 
 // Pass 1 reads the posting lists in blocks of slots (index.cc): a collection

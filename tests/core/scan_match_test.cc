@@ -205,6 +205,39 @@ TEST(ScanMatchTest, VerifyHitsSkipsTheGuessFreeSearchOnceACandidateMatched) {
   EXPECT_GT(alone[0].score, 0.9);
 }
 
+TEST(ScanMatchTest, VerifyHitsStopsAfterEnoughMatchesAndPreparesOnlyVerifiedMaps) {
+  const LocalMap& db = RichMap();
+  const Pose2 truth{3.0, 0.0, 0.0};
+  const LocalMap query = MovedCopy(db, truth);
+  int prepared_count = 0;
+  auto prepare = [&] {
+    ++prepared_count;
+    return std::make_shared<const PreparedMap>(PrepareMap(db));
+  };
+  // Four candidates of the query's place, prepared on demand.
+  std::vector<HitCandidate> candidates;
+  for (uint64_t id = 1; id <= 4; ++id) candidates.push_back({id, nullptr, 1.0 - 0.1 * id, {truth}, prepare});
+  VerifyOptions options;
+  options.enough_matches = 2;
+  const std::vector<VerifiedHit> hits = VerifyHits(query, candidates, options);
+  ASSERT_EQ(hits.size(), 4u);
+  EXPECT_EQ(prepared_count, 2);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_TRUE(hits[i].verified);
+    EXPECT_GT(hits[i].score, 0.8);
+    EXPECT_NE(hits[i].db, nullptr);
+  }
+  EXPECT_EQ(hits[2].map_id, 3u);  // the rest follow unverified, in input order
+  EXPECT_FALSE(hits[2].verified);
+  EXPECT_EQ(hits[2].db, nullptr);
+  EXPECT_EQ(hits[3].map_id, 4u);
+  // 0 verifies every candidate.
+  prepared_count = 0;
+  options.enough_matches = 0;
+  for (const VerifiedHit& h : VerifyHits(query, candidates, options)) EXPECT_TRUE(h.verified);
+  EXPECT_EQ(prepared_count, 4);
+}
+
 TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
   std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}}, {2, nullptr, 0.5, {}}, {3, nullptr, 0.9, {}}};
   VerifyOptions options;
