@@ -81,6 +81,8 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
+  if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
+  if (key == "verify_enough_matches") return SetUnsigned(key, value, &config->verify_enough_matches);
   if (key == "prepared_map_cache_entries") return SetUnsigned(key, value, &config->prepared_map_cache_entries);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "default_max_offset_m") {

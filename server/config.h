@@ -69,11 +69,27 @@ struct ServerConfig {
   // 20, lmd-eval's best, gains about 0.07 place recall@1 on the real logs
   // (docs/results.md) and cost 20.5 ms in the same test.
   uint32_t verify_candidates = 10;
+  // Verification stops once this many candidates matched well (verification
+  // score >= 0.8); the rest are returned unverified, in index order. 0:
+  // verify all verify_candidates. Off by default: the first matches are
+  // mostly maps just before the query on its own route, so stopping there
+  // left loop closures unverified: on intel, aces, mit and fr079 (204
+  // lmdctl queries) the first hit from another pass showed the query's
+  // place for 63 of 117 queries with 3 vs 67 of 110 with 0. It saves CPU
+  // when many robots share a place (README, lmd-bench load).
+  uint32_t verify_enough_matches = 0;
   // Largest offset (m, per axis) between the planned viewpoints of two maps
   // of one place that the default method's kernel accepts. The planners are
   // metres off on real logs: 3 m gave +0.05 place recall@1 over 0.5 m
   // (lmd-eval retrieval ablation). The paper methods keep the index default.
   double default_max_offset_m = 3.0;
+  // The default method's index scores exactly at most this many maps, those
+  // with the best bounds (RetrieveOptions::max_maps_scored); 0: exact. In a
+  // store with many maps of each place the bound prunes little (lmd-bench
+  // load: 20-60 % of all maps scored). 200: on the same 204 queries the best
+  // hit other than the query's own map was exact's for 99.5 % (100: 96.6 %),
+  // and lmdd's CPU per robot-second fell by 13 % at 80 robots.
+  uint32_t max_maps_scored = 200;
   // true: index each feature with its 3 m inner word too, 64 features per
   // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
   // when a store is created (a store made with the other setting is refused).

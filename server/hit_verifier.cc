@@ -32,7 +32,7 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
 
 Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& collection, const LocalMap& query,
                                                           const Lmd& query_lmd, const std::vector<StoreHit>& hits,
-                                                          size_t candidates) {
+                                                          size_t candidates, size_t enough_matches) {
   candidates = std::min(candidates, hits.size());
   std::vector<HitCandidate> inputs;
   for (size_t i = 0; i < candidates; ++i) {
@@ -46,8 +46,11 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
       continue;
     }
     candidate.guesses = {RelativePose(query_lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset)};
-    Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit, db->frame.heading);
-    if (prepared.ok()) candidate.db = std::move(prepared).value();
+    // Prepared only if verified (enough matches may stop before it).
+    candidate.prepare = [this, &collection, &hit, heading = db->frame.heading] {
+      Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit, heading);
+      return prepared.ok() ? std::move(prepared).value() : nullptr;
+    };
     inputs.push_back(std::move(candidate));
   }
   std::vector<VerifiedStoreHit> out;
@@ -56,14 +59,15 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
   // orientations, so the guided search stays near its guess (a quarter-turn
   // search costs 4x and the guess-free fallback still covers a wrong turn).
   options.match.quarter_turns = false;
+  options.enough_matches = enough_matches;
   const PreparedQuery prepared_query = PrepareQuery(query, options.match, query_lmd.frame.heading);
-  for (const VerifiedHit& verified : VerifyHits(prepared_query, inputs, options)) {
+  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options)) {
     VerifiedStoreHit hit;
     hit.hit = hits[verified.map_id];
     hit.verified = verified.verified && verified.score > 0;
-    hit.score = verified.score;
+    hit.score = verified.verified ? verified.score : hit.hit.hit.score;
     hit.pose = verified.match.pose;
-    if (hit.verified) hit.prepared = inputs[verified.map_id].db;
+    if (hit.verified) hit.prepared = std::move(verified.db);
     out.push_back(std::move(hit));
   }
   for (size_t i = candidates; i < hits.size(); ++i) out.push_back({hits[i], false, hits[i].hit.score, {}, nullptr});

@@ -1,7 +1,9 @@
 // Retrieve and DetectChanges of LmdServiceImpl: describe the query map the
 // way the store's maps were described, ask the collection's index, and (for
 // changes) run the change detector against each hit's stored descriptor.
+#include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "core/align/relative_pose.h"
 #include "core/change/geometric_changes.h"
@@ -50,13 +52,18 @@ void AlignFromPose(const Frame& query_frame, const Frame& db_frame, const Pose2&
 
 }  // namespace
 
-Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collection, const v1::LocalMap& map,
-                                                       uint32_t top_k, v1::Method method) const {
+Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
+    const std::string& collection, const v1::LocalMap& map, uint32_t top_k, v1::Method method,
+    const google::protobuf::RepeatedPtrField<std::string>& exclude) const {
   Status valid = ValidateCollectionName(collection);
   if (valid.ok()) valid = ValidateLocalMap(map, config_, "query map");
   if (!valid.ok()) return valid;
   if (top_k > config_.max_top_k) {
     return Status::InvalidArgument("top_k " + std::to_string(top_k) + " exceeds max_top_k (" +
+                                   std::to_string(config_.max_top_k) + ")");
+  }
+  if (static_cast<size_t>(exclude.size()) > config_.max_top_k) {
+    return Status::InvalidArgument(std::to_string(exclude.size()) + " exclude_map_ids exceed max_top_k (" +
                                    std::to_string(config_.max_top_k) + ")");
   }
   Result<Method> core_method = CoreMethod(method, store_->indexing().viewpoint.planner);
@@ -69,14 +76,26 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const std::string& collec
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
   const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
-  options.top_k = verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted;
+  // Excluded maps may take places in the index's ranking: ask for that many more.
+  options.top_k = (verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted) + exclude.size();
   options.method = *core_method;
-  if (method == v1::METHOD_DEFAULT) options.max_offset_m = config_.default_max_offset_m;
+  if (method == v1::METHOD_DEFAULT) {
+    options.max_offset_m = config_.default_max_offset_m;
+    options.max_maps_scored = config_.max_maps_scored;
+  }
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options);
   if (!hits.ok()) return hits.status();
+  if (!exclude.empty()) {
+    const std::unordered_set<std::string> excluded(exclude.begin(), exclude.end());
+    hits->erase(std::remove_if(hits->begin(), hits->end(),
+                               [&](const StoreHit& hit) { return excluded.count(hit.map_id) != 0; }),
+                hits->end());
+    if (hits->size() > options.top_k - exclude.size()) hits->resize(options.top_k - exclude.size());
+  }
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
-        verifier_.Verify(collection, query.map, query.lmd, *hits, config_.verify_candidates);
+        verifier_.Verify(collection, query.map, query.lmd, *hits, config_.verify_candidates,
+                         config_.verify_enough_matches);
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();
   } else {
@@ -112,7 +131,8 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
                                                    v1::RetrieveResponse* response) {
   return runner_->Unary(context, "Retrieve", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
-    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method());
+    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
+                                   request->exclude_map_ids());
     if (!query.ok()) return query.status();
     for (size_t rank = 0; rank < query->hits.size(); ++rank) {
       if (context->IsCancelled()) return Status::Cancelled("call cancelled");
@@ -133,7 +153,8 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
   return runner_->Unary(context, "DetectChanges", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     if (!(request->threshold() >= 0)) return Status::InvalidArgument("threshold must be >= 0 (0: the default)");
-    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method());
+    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
+                                   request->exclude_map_ids());
     if (!query.ok()) return query.status();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
 

@@ -173,6 +173,8 @@ int RunLoadBench(int argc, char** argv) {
           request.set_collection(options.collection);
           *request.mutable_map() = map.map();
           request.set_top_k(5);
+          // The robot asks about stored maps other than the one it just sent.
+          request.add_exclude_map_ids(map.metadata().map_id());
           v1::DetectChangesResponse response;
           return (*client)->DetectChanges(request, &response);
         });

@@ -13,12 +13,15 @@ namespace {
 TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   testing::TempDir dir;
   const std::string path = dir.path() + "/lmdd.conf";
-  std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n";
+  std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
+                      << "verify_enough_matches = 0\nmax_maps_scored = 64\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
   EXPECT_EQ(config.max_top_k, 50u);
   EXPECT_TRUE(config.sync_writes);
+  EXPECT_EQ(config.verify_enough_matches, 0u);
+  EXPECT_EQ(config.max_maps_scored, 64u);
 }
 
 TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {

@@ -139,6 +139,33 @@ TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
   EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
 }
 
+TEST_F(RetrievalServiceTest, ExcludedMapsAreNeverReturned) {
+  v1::RetrieveRequest request = Query(CornerMap(1.0, 0.5));
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  ASSERT_GE(response.hits_size(), 1);
+  EXPECT_EQ(response.hits(0).map_id(), "corner");
+  request.add_exclude_map_ids("corner");
+  request.add_exclude_map_ids("no-such-map");  // unknown ids are harmless
+  response.Clear();
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  for (const v1::MapHit& hit : response.hits()) EXPECT_NE(hit.map_id(), "corner");
+
+  v1::DetectChangesRequest changes;
+  changes.set_collection("site");
+  *changes.mutable_map() = CornerMap(1.0, 0.5);
+  changes.add_exclude_map_ids("corner");
+  v1::DetectChangesResponse detected;
+  ASSERT_TRUE(server_->client().DetectChanges(changes, &detected).ok());
+  for (const v1::ChangeHit& hit : detected.hits()) EXPECT_NE(hit.hit().map_id(), "corner");
+
+  // More ids than max_top_k: refused, naming the limit.
+  for (int i = 0; i < 1001; ++i) request.add_exclude_map_ids("m" + std::to_string(i));
+  const grpc::Status status = server_->client().Retrieve(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("exclude_map_ids"), std::string::npos) << status.error_message();
+}
+
 TEST_F(RetrievalServiceTest, TopKZeroMeansTheDefault) {
   v1::RetrieveResponse response;
   ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(0, 0), 0), &response).ok());
