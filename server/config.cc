@@ -83,7 +83,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
   if (key == "verify_enough_matches") return SetUnsigned(key, value, &config->verify_enough_matches);
-  if (key == "prepared_map_cache_entries") return SetUnsigned(key, value, &config->prepared_map_cache_entries);
+  if (key == "prepared_map_cache_mb") return SetUnsigned(key, value, &config->prepared_map_cache_mb);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "default_max_offset_m") {
     char* end = nullptr;

@@ -18,11 +18,14 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
   Result<v1::StoredMap> stored = store_->GetMap(collection, hit.map_id);
   if (!stored.ok()) return stored.status();
   auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions(), heading));
+  const size_t bytes = prepared->MemoryBytes();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (capacity_ > 0 && index_.count(key) == 0) {
+  if (bytes <= capacity_bytes_ && index_.count(key) == 0) {
     entries_.emplace_front(key, prepared);
     index_[key] = entries_.begin();
-    if (entries_.size() > capacity_) {
+    cached_bytes_ += bytes;
+    while (cached_bytes_ > capacity_bytes_) {
+      cached_bytes_ -= entries_.back().second->MemoryBytes();
       index_.erase(entries_.back().first);
       entries_.pop_back();
     }

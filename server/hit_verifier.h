@@ -3,7 +3,7 @@
 // points aligned onto each candidate's points by our scan matcher) and
 // re-ranked by aligned overlap; each verified hit gets the scan matcher's
 // metric pose. Prepared db maps (likelihood pyramids, ~100-200 KB each, 1-5 ms
-// to build) are kept in an LRU cache keyed by the map's index id, which
+// to build) are kept in an LRU cache of bounded bytes keyed by the map's index id, which
 // changes whenever a map is replaced, so a cached entry is never stale.
 #pragma once
 
@@ -30,8 +30,9 @@ struct VerifiedStoreHit {
 
 class HitVerifier {
  public:
-  // `store` must outlive the verifier; at most `cache_entries` prepared maps are kept.
-  HitVerifier(const MapStore* store, size_t cache_entries) : store_(store), capacity_(cache_entries) {}
+  // `store` must outlive the verifier; prepared maps are kept up to
+  // `cache_bytes` (PreparedMap::MemoryBytes).
+  HitVerifier(const MapStore* store, size_t cache_bytes) : store_(store), capacity_bytes_(cache_bytes) {}
 
   // Verifies the first `candidates` hits of `hits` (all of them if fewer)
   // against `query`, in retrieval order, stopping once `enough_matches` of
@@ -50,8 +51,9 @@ class HitVerifier {
                                                       double heading);
 
   const MapStore* const store_;
-  const size_t capacity_;
+  const size_t capacity_bytes_;
   std::mutex mutex_;
+  size_t cached_bytes_ = 0;  // guarded by mutex_
   // Guarded by mutex_: most recent first; key "<collection>/<index id>".
   std::list<std::pair<std::string, std::shared_ptr<const PreparedMap>>> entries_;
   std::unordered_map<std::string, decltype(entries_)::iterator> index_;

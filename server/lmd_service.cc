@@ -35,7 +35,7 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       runner_(runner),
       metrics_(metrics),
       cache_(config.descriptor_cache_entries),
-      verifier_(store, config.prepared_map_cache_entries) {}
+      verifier_(store, size_t{config.prepared_map_cache_mb} << 20) {}
 
 Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
