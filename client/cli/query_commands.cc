@@ -1,4 +1,5 @@
 // ingest, query, changes and render of lmdctl.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -22,8 +23,9 @@ Result<v1::Method> MethodFromArgs(const Args& args) {
   return Status::InvalidArgument("--method must be default, lmd-cor, lmd-cog or bow, got '" + name + "'");
 }
 
-// Fills the collection, map, top_k and method of a Retrieve or DetectChanges
-// request; 2 after printing a usage error, 1 after another error, else 0.
+// Fills the collection, map, top_k, method and excluded ids (--exclude
+// ID[,ID...]) of a Retrieve or DetectChanges request; 2 after printing a
+// usage error, 1 after another error, else 0.
 template <typename Request>
 int FillQuery(const CommandContext& ctx, Request* request) {
   request->set_collection(Required(ctx.args, "collection"));
@@ -37,6 +39,12 @@ int FillQuery(const CommandContext& ctx, Request* request) {
   Result<v1::Method> method = MethodFromArgs(ctx.args);
   if (!method.ok()) return Fail(method.status().message(), 2);
   request->set_method(*method);
+  const std::string exclude = ctx.args.Get("exclude");
+  for (size_t begin = 0; begin < exclude.size();) {
+    const size_t end = std::min(exclude.find(',', begin), exclude.size());
+    if (end > begin) request->add_exclude_map_ids(exclude.substr(begin, end - begin));
+    begin = end + 1;
+  }
   return 0;
 }
 

@@ -124,6 +124,12 @@ TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
                                "/robot.log --map 4", dir_);
   ASSERT_EQ(query.exit_code, 0) << query.err;
   EXPECT_NE(query.out.find("\"map_id\":\"robot-4\""), std::string::npos) << query.out;
+  CliRun others = RunLmdctl(base + "--json query --collection fleet --top-k 3 --exclude robot-4,robot-3 --log " +
+                                dir_.path() + "/robot.log --map 4", dir_);
+  ASSERT_EQ(others.exit_code, 0) << others.err;
+  EXPECT_GT(CountLines(others.out), 0);
+  EXPECT_EQ(others.out.find("\"map_id\":\"robot-4\""), std::string::npos) << others.out;
+  EXPECT_EQ(others.out.find("\"map_id\":\"robot-3\""), std::string::npos) << others.out;
 
   CliRun render = RunLmdctl(base + "render --collection fleet --log " + dir_.path() + "/robot.log --map 4 --out " +
                                 dir_.path() + "/r.svg", dir_);
