@@ -35,6 +35,20 @@ Status SetUnsigned(const std::string& key, const std::string& value, T* field) {
   return status;
 }
 
+// A number for which `valid` holds; `what` describes it in the error (e.g.
+// "a number of metres in (0, 50]").
+template <typename Valid>
+Status SetNumber(const std::string& key, const std::string& value, Valid valid, const std::string& what,
+                 double* field) {
+  char* end = nullptr;
+  const double parsed = std::strtod(value.c_str(), &end);
+  if (value.empty() || *end != '\0' || !valid(parsed)) {
+    return Status::InvalidArgument(key + " must be " + what + ", got '" + value + "'");
+  }
+  *field = parsed;
+  return Status::Ok();
+}
+
 Status SetBool(const std::string& key, const std::string& value, bool* field) {
   if (value == "true" || value == "1" || value == "yes") {
     *field = true;
@@ -82,17 +96,16 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
+  if (key == "reverse_conflict_weight") {
+    return SetNumber(key, value, [](double w) { return w >= 0 && w <= 100; }, "a weight in [0, 100]",
+                     &config->reverse_conflict_weight);
+  }
   if (key == "verify_enough_matches") return SetUnsigned(key, value, &config->verify_enough_matches);
   if (key == "prepared_map_cache_mb") return SetUnsigned(key, value, &config->prepared_map_cache_mb);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "default_max_offset_m") {
-    char* end = nullptr;
-    const double parsed = std::strtod(value.c_str(), &end);
-    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 50) {
-      return Status::InvalidArgument(key + " must be a number of metres in (0, 50], got '" + value + "'");
-    }
-    config->default_max_offset_m = parsed;
-    return Status::Ok();
+    return SetNumber(key, value, [](double m) { return m > 0 && m <= 50; }, "a number of metres in (0, 50]",
+                     &config->default_max_offset_m);
   }
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "inner_words") return SetBool(key, value, &config->inner_words);

@@ -73,11 +73,19 @@ struct ServerConfig {
   // score >= 0.8); the rest are returned unverified, in index order. 0:
   // verify all verify_candidates. Off by default: the first matches are
   // mostly maps just before the query on its own route, so stopping there
-  // left loop closures unverified: on intel, aces, mit and fr079 (204
-  // lmdctl queries) the first hit from another pass showed the query's
-  // place for 63 of 117 queries with 3 vs 67 of 110 with 0. It saves CPU
-  // when many robots share a place (README, lmd-bench load).
+  // left loop closures unverified: on intel, aces, mit and fr079 (every
+  // 15th map queried with lmdctl, 204 queries) the first hit from another
+  // pass showed the query's place for 63 of 117 queries with 3 vs 67 of 110
+  // with 0. It saves CPU when many robots share a place (README).
   uint32_t verify_enough_matches = 0;
+  // Weight of reverse conflicts in the verification score: the fraction of
+  // a candidate's points that the query map saw as free space (lmd-eval's
+  // best uses 4). 0: not measured. Off by default for CPU: with 4, on the
+  // 204 real-log queries above the first hit from another pass showed the
+  // place for 71 of 114 vs 66 of 110 queries, top-5 precision 0.713 vs 0.721;
+  // the demo localised 4 vs 3 of 8; lmd-bench load at 100 robots cost 4-13 %
+  // more CPU (the query's free space is ray-cast once per call).
+  double reverse_conflict_weight = 0.0;
   // Largest offset (m, per axis) between the planned viewpoints of two maps
   // of one place that the default method's kernel accepts. The planners are
   // metres off on real logs: 3 m gave +0.05 place recall@1 over 0.5 m

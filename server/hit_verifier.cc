@@ -1,5 +1,7 @@
 #include "server/hit_verifier.h"
 
+#include <optional>
+
 #include "core/align/relative_pose.h"
 #include "proto/convert.h"
 
@@ -35,7 +37,8 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
 
 Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& collection, const LocalMap& query,
                                                           const Lmd& query_lmd, const std::vector<StoreHit>& hits,
-                                                          size_t candidates, size_t enough_matches) {
+                                                          size_t candidates, size_t enough_matches,
+                                                          double reverse_conflict_weight) {
   candidates = std::min(candidates, hits.size());
   std::vector<HitCandidate> inputs;
   for (size_t i = 0; i < candidates; ++i) {
@@ -63,8 +66,14 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
   // search costs 4x and the guess-free fallback still covers a wrong turn).
   options.match.quarter_turns = false;
   options.enough_matches = enough_matches;
+  options.reverse_conflict_weight = reverse_conflict_weight;
   const PreparedQuery prepared_query = PrepareQuery(query, options.match, query_lmd.frame.heading);
-  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options)) {
+  // The query's own free space, for reverse conflicts (about one db map's preparation).
+  std::optional<PreparedMap> query_map;
+  if (reverse_conflict_weight > 0 && !inputs.empty()) {
+    query_map = PrepareMap(query, PreparedMapOptions(), query_lmd.frame.heading);
+  }
+  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options, query_map ? &*query_map : nullptr)) {
     VerifiedStoreHit hit;
     hit.hit = hits[verified.map_id];
     hit.verified = verified.verified && verified.score > 0;

@@ -36,13 +36,15 @@ class HitVerifier {
 
   // Verifies the first `candidates` hits of `hits` (all of them if fewer)
   // against `query`, in retrieval order, stopping once `enough_matches` of
-  // them matched well (0: never stop; VerifyOptions::enough_matches), and
+  // them matched well (0: never stop; VerifyOptions::enough_matches), with
+  // reverse conflicts weighted by `reverse_conflict_weight` (0: not measured), and
   // returns every hit re-ranked: verified ones by verification score, the
   // rest after them in retrieval order. `query_lmd` supplies the planned
   // frame for the index's pose guesses.
   Result<std::vector<VerifiedStoreHit>> Verify(const std::string& collection, const LocalMap& query,
                                                const Lmd& query_lmd, const std::vector<StoreHit>& hits,
-                                               size_t candidates, size_t enough_matches);
+                                               size_t candidates, size_t enough_matches,
+                                               double reverse_conflict_weight);
 
  private:
   // The prepared db map of a hit, from the cache or built from the store;

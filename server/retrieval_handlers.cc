@@ -95,7 +95,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
         verifier_.Verify(collection, query.map, query.lmd, *hits, config_.verify_candidates,
-                         config_.verify_enough_matches);
+                         config_.verify_enough_matches, config_.reverse_conflict_weight);
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();
   } else {

@@ -2,12 +2,22 @@
 
 #include <algorithm>
 
+#include "core/localmap/pose_ops.h"
+
 namespace lmd {
 
 std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vector<HitCandidate>& candidates,
-                                    const VerifyOptions& options) {
-  auto score_of = [&](const ScanMatch& m) {
-    return m.score > 0.0 ? m.score - options.conflict_weight * m.conflict_fraction : 0.0;
+                                    const VerifyOptions& options, const PreparedMap* query_map) {
+  const bool reverse = query_map != nullptr && !query_map->empty() && options.reverse_conflict_weight > 0.0;
+  // Fraction of db points that the aligned query map saw as free space.
+  auto reverse_conflicts = [&](const ScanMatch& m, const PreparedMap& db) {
+    if (!reverse || m.score <= 0.0) return 0.0;
+    return MeasureOverlap(db.points, *query_map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
+  };
+  auto score_of = [&](const ScanMatch& m, double reverse_fraction) {
+    return m.score > 0.0 ? m.score - options.conflict_weight * m.conflict_fraction -
+                               options.reverse_conflict_weight * reverse_fraction
+                         : 0.0;
   };
   std::vector<VerifiedHit> hits;
   hits.reserve(candidates.size());
@@ -30,7 +40,8 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
       h.match.pose = c.guesses[0];
       if (dbs[i]) {
         h.match = MatchLocalMaps(query, *dbs[i], c.guesses, options.match);
-        h.score = score_of(h.match);
+        h.reverse_conflict_fraction = reverse_conflicts(h.match, *dbs[i]);
+        h.score = score_of(h.match, h.reverse_conflict_fraction);
         if (h.score >= options.matched_score) ++matches;
       }
     }
@@ -42,9 +53,11 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
       VerifiedHit& h = hits[i];
       if (!dbs[i] || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
       const ScanMatch global = MatchLocalMapsGlobal(query, *dbs[i], options.match);
-      if (c.guesses.empty() || score_of(global) > h.score) {
+      const double global_reverse = reverse_conflicts(global, *dbs[i]);
+      if (c.guesses.empty() || score_of(global, global_reverse) > h.score) {
         h.match = global;
-        h.score = score_of(global);
+        h.reverse_conflict_fraction = global_reverse;
+        h.score = score_of(global, global_reverse);
       }
     }
   }

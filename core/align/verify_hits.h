@@ -10,8 +10,10 @@
 // guess-free search costs several guided ones; once one candidate matched
 // well, it rarely changes the order of the top hits.
 // Verification score = overlap score - conflict_weight * conflict
-// fraction (query points the db map saw as free space): a wrong place that
-// shares walls with the query usually also puts walls in its free space.
+// fraction (query points the db map saw as free space) - reverse_conflict_weight
+// * reverse conflict fraction (db points the query map saw as free space, when
+// the query's own free space is given): a wrong place that shares walls with
+// the query usually also puts walls in the other map's free space.
 // Candidates are verified in input order; once enough_matches of them reached
 // matched_score, the rest are not verified (in a store that holds many maps
 // of the query's place, the first few confirm it and the others add little).
@@ -55,6 +57,9 @@ struct VerifyOptions {
   // between the 10th percentile of true pairs and the 90th of wrong pairs in
   // all three logs (0.08 / 0.03 / -0.03 with the overlap alone -> 0.21 / 0.06 / 0.06).
   double conflict_weight = 2.0;
+  // Weight of the reverse conflict fraction; used only when VerifyHits gets
+  // the query prepared as a map (with its free space). 0 = not measured.
+  double reverse_conflict_weight = 0.0;
   size_t max_candidates = 0;         // verify only the first N candidates (0 = all); the rest follow unverified
   size_t enough_matches = 0;         // stop verifying once N candidates reached matched_score (0 = never)
 };
@@ -66,13 +71,16 @@ struct VerifiedHit {
   bool verified = false;      // false when beyond max_candidates
   double score = 0.0;         // verification score (see policy); 0 if unverified or unmatchable
   ScanMatch match;            // pose (query own frame in db own frame), overlap, conflicts
+  double reverse_conflict_fraction = 0.0;  // db points in the query's free space (when measured)
   std::shared_ptr<const PreparedMap> db;  // the db map as matched (verified only; may be null)
 };
 
 // Candidates re-ordered as described above; never fails (degenerate maps score 0).
 std::vector<VerifiedHit> VerifyHits(const LocalMap& query, const std::vector<HitCandidate>& candidates,
                                     const VerifyOptions& options = {});
+// `query_map`: the query prepared as a map (PrepareMap, with free space), for
+// reverse conflicts; may be null.
 std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vector<HitCandidate>& candidates,
-                                    const VerifyOptions& options = {});
+                                    const VerifyOptions& options = {}, const PreparedMap* query_map = nullptr);
 
 }  // namespace lmd

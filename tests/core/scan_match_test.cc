@@ -238,6 +238,40 @@ TEST(ScanMatchTest, VerifyHitsStopsAfterEnoughMatchesAndPreparesOnlyVerifiedMaps
   EXPECT_EQ(prepared_count, 4);
 }
 
+TEST(ScanMatchTest, ReverseConflictsLowerAMapWithPointsInTheQuerysFreeSpace) {
+  const LocalMap& query = RichMap();
+  const PreparedMap query_map = PrepareMap(query);
+  // The same map plus 40 points where the query's beams passed (free, no point near).
+  LocalMap cluttered = query;
+  for (double x = query_map.min_corner.x; x < query_map.max_corner.x && cluttered.points.size() < query.points.size() + 40;
+       x += 0.3) {
+    for (double y = query_map.min_corner.y; y < query_map.max_corner.y; y += 0.3) {
+      if (InFreeSpace(query_map, {x, y}) && NearestPoint(query_map, {x, y}, 0.4) < 0) cluttered.points.push_back({x, y});
+      if (cluttered.points.size() == query.points.size() + 40) break;
+    }
+  }
+  ASSERT_EQ(cluttered.points.size(), query.points.size() + 40);
+  const Pose2 identity{0, 0, 0};
+  const std::vector<HitCandidate> candidates = {
+      {1, std::make_shared<PreparedMap>(PrepareMap(query)), 0.9, {identity}},
+      {2, std::make_shared<PreparedMap>(PrepareMap(cluttered)), 0.8, {identity}}};
+  VerifyOptions options;
+  options.reverse_conflict_weight = 4.0;
+  auto by_id = [](const std::vector<VerifiedHit>& hits, uint64_t id) {
+    return *std::find_if(hits.begin(), hits.end(), [&](const VerifiedHit& h) { return h.map_id == id; });
+  };
+  // Without the query's free space the two score alike (every query point is explained by both).
+  const std::vector<VerifiedHit> forward = VerifyHits(PrepareQuery(query), candidates, options);
+  EXPECT_NEAR(by_id(forward, 1).score, by_id(forward, 2).score, 0.01);
+  const std::vector<VerifiedHit> both = VerifyHits(PrepareQuery(query), candidates, options, &query_map);
+  const VerifiedHit same = by_id(both, 1), extra = by_id(both, 2);
+  EXPECT_LT(same.reverse_conflict_fraction, 0.01);
+  const double expected = 40.0 / static_cast<double>(cluttered.points.size());
+  EXPECT_NEAR(extra.reverse_conflict_fraction, expected, 0.5 * expected);
+  EXPECT_LT(extra.score, same.score - 2.0 * expected);
+  EXPECT_EQ(both[0].map_id, 1u);
+}
+
 TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
   std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}}, {2, nullptr, 0.5, {}}, {3, nullptr, 0.9, {}}};
   VerifyOptions options;

@@ -36,6 +36,10 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_FALSE(SetConfigValue("max_top_k", "-3", &config).ok());
   EXPECT_FALSE(SetConfigValue("max_top_k", "ten", &config).ok());
   EXPECT_FALSE(SetConfigValue("sync_writes", "maybe", &config).ok());
+  EXPECT_FALSE(SetConfigValue("reverse_conflict_weight", "-1", &config).ok());
+  EXPECT_FALSE(SetConfigValue("default_max_offset_m", "0", &config).ok());
+  ASSERT_TRUE(SetConfigValue("reverse_conflict_weight", "4", &config).ok());
+  EXPECT_EQ(config.reverse_conflict_weight, 4.0);
   EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);
 }
 

@@ -46,7 +46,7 @@ class HitVerifierTest : public ::testing::Test {
 
   // The prepared map each verified hit was matched against, by map id.
   std::map<std::string, std::shared_ptr<const PreparedMap>> Verify(HitVerifier* verifier) {
-    Result<std::vector<VerifiedStoreHit>> verified = verifier->Verify("c", query_, query_lmd_, hits_, 2, 0);
+    Result<std::vector<VerifiedStoreHit>> verified = verifier->Verify("c", query_, query_lmd_, hits_, 2, 0, 0.0);
     EXPECT_TRUE(verified.ok());
     std::map<std::string, std::shared_ptr<const PreparedMap>> out;
     for (const VerifiedStoreHit& hit : *verified) {
