@@ -94,9 +94,11 @@ struct ServerConfig {
   // The default method's index scores exactly at most this many maps, those
   // with the best bounds (RetrieveOptions::max_maps_scored); 0: exact. In a
   // store with many maps of each place the bound prunes little (lmd-bench
-  // load: 20-60 % of all maps scored). 200: on the same 204 queries the best
-  // hit other than the query's own map was exact's for 99.5 % (100: 96.6 %),
-  // and lmdd's CPU per robot-second fell by 13 % at 80 robots.
+  // load: 20-60 % of all maps scored). 200: on intel, aces, mit and fr079
+  // (every 15th map queried with lmdctl, 204 queries) the best hit other than
+  // the query's own map was exact scoring's for 202 queries, and it showed
+  // the query's place as often (0.961); lmdd's CPU per robot-second fell by
+  // 13 % at 80 robots (lmd-bench load).
   uint32_t max_maps_scored = 200;
   // true: index each feature with its 3 m inner word too, 64 features per
   // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
