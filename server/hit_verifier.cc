@@ -22,7 +22,7 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
   auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions(), heading));
   const size_t bytes = prepared->MemoryBytes();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (bytes <= capacity_bytes_ && index_.count(key) == 0) {
+  if (capacity_bytes_ > 0 && bytes <= capacity_bytes_ && index_.count(key) == 0) {
     entries_.emplace_front(key, prepared);
     index_[key] = entries_.begin();
     cached_bytes_ += bytes;

@@ -24,7 +24,7 @@ constexpr char kUsage[] =
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "QUERY is --file POINTS or --log FILE --map K; M is default, lmd-cor, lmd-cog or bow;\n"
-    "--exclude ID[,ID...] leaves those stored maps out of query / changes hits;\n"
+    "--exclude ID[,ID...] leaves those stored maps out of query / changes / render hits;\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 

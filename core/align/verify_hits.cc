@@ -24,7 +24,6 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
   const size_t n_verify = options.max_candidates ? std::min(options.max_candidates, candidates.size())
                                                  : candidates.size();
   size_t matches = 0;  // candidates that reached matched_score near their guesses
-  std::vector<std::shared_ptr<const PreparedMap>> dbs(candidates.size());
   for (size_t i = 0; i < candidates.size(); ++i) {
     const HitCandidate& c = candidates[i];
     VerifiedHit h;
@@ -32,28 +31,25 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
     h.retrieval_score = c.retrieval_score;
     h.retrieval_rank = i;
     h.verified = i < n_verify && (options.enough_matches == 0 || matches < options.enough_matches);
-    if (h.verified) {
-      dbs[i] = c.db ? c.db : c.prepare ? c.prepare() : nullptr;
-      h.db = dbs[i];
-    }
+    if (h.verified) h.db = c.db ? c.db : c.prepare ? c.prepare() : nullptr;
     if (h.verified && !c.guesses.empty()) {
       h.match.pose = c.guesses[0];
-      if (dbs[i]) {
-        h.match = MatchLocalMaps(query, *dbs[i], c.guesses, options.match);
-        h.reverse_conflict_fraction = reverse_conflicts(h.match, *dbs[i]);
+      if (h.db) {
+        h.match = MatchLocalMaps(query, *h.db, c.guesses, options.match);
+        h.reverse_conflict_fraction = reverse_conflicts(h.match, *h.db);
         h.score = score_of(h.match, h.reverse_conflict_fraction);
         if (h.score >= options.matched_score) ++matches;
       }
     }
-    hits.push_back(h);
+    hits.push_back(std::move(h));
   }
   if (options.global_search && matches == 0) {
     for (size_t i = 0; i < n_verify; ++i) {
       const HitCandidate& c = candidates[i];
       VerifiedHit& h = hits[i];
-      if (!dbs[i] || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
-      const ScanMatch global = MatchLocalMapsGlobal(query, *dbs[i], options.match);
-      const double global_reverse = reverse_conflicts(global, *dbs[i]);
+      if (!h.db || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
+      const ScanMatch global = MatchLocalMapsGlobal(query, *h.db, options.match);
+      const double global_reverse = reverse_conflicts(global, *h.db);
       if (c.guesses.empty() || score_of(global, global_reverse) > h.score) {
         h.match = global;
         h.reverse_conflict_fraction = global_reverse;

@@ -68,7 +68,7 @@ struct VerifiedHit {
   uint64_t map_id = 0;
   double retrieval_score = 0.0;
   size_t retrieval_rank = 0;  // position in the input
-  bool verified = false;      // false when beyond max_candidates
+  bool verified = false;      // false beyond max_candidates or after enough_matches
   double score = 0.0;         // verification score (see policy); 0 if unverified or unmatchable
   ScanMatch match;            // pose (query own frame in db own frame), overlap, conflicts
   double reverse_conflict_fraction = 0.0;  // db points in the query's free space (when measured)

@@ -390,7 +390,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   while (!heap.empty()) {
     const Candidate next = heap.front();
     if (top.full() && next.bound < top.kth_score()) break;
-    if (max_scored != 0 && stats->maps_scored == max_scored) break;
+    if (max_scored != 0 && top.full() && stats->maps_scored >= max_scored) break;
     std::pop_heap(heap.begin(), heap.end(), lower);
     heap.pop_back();
     ++stats->maps_scored;

@@ -58,8 +58,9 @@ struct RetrieveOptions {
   // adds little evidence and defeats any inverted file. In (0, 1];
   // 1 = no stop list (the paper's kernel, default).
   double max_word_share = 1.0;
-  // Inverted file only: score exactly at most this many maps (those with the
-  // best bounds) and rank those; 0 = no limit, which makes retrieval exact
+  // Inverted file only: once top_k maps have a score, stop after this many
+  // maps scored exactly (best bounds first) and rank those; 0 = no limit,
+  // which makes retrieval exact
   // (index.h). A limit trades exactness for time in stores that hold many
   // maps of every place, where the bound prunes little.
   size_t max_maps_scored = 0;

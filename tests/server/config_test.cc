@@ -14,13 +14,14 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   testing::TempDir dir;
   const std::string path = dir.path() + "/lmdd.conf";
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
-                      << "verify_enough_matches = 0\nmax_maps_scored = 64\n";
+                      << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
   EXPECT_EQ(config.max_top_k, 50u);
   EXPECT_TRUE(config.sync_writes);
-  EXPECT_EQ(config.verify_enough_matches, 0u);
+  EXPECT_EQ(config.verify_enough_matches, 3u);
+  EXPECT_EQ(config.prepared_map_cache_mb, 32u);
   EXPECT_EQ(config.max_maps_scored, 64u);
 }
 
@@ -37,6 +38,8 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_FALSE(SetConfigValue("max_top_k", "ten", &config).ok());
   EXPECT_FALSE(SetConfigValue("sync_writes", "maybe", &config).ok());
   EXPECT_FALSE(SetConfigValue("reverse_conflict_weight", "-1", &config).ok());
+  EXPECT_NE(SetConfigValue("prepared_map_cache_entries", "500", &config).message().find("prepared_map_cache_mb"),
+            std::string::npos);
   EXPECT_FALSE(SetConfigValue("default_max_offset_m", "0", &config).ok());
   ASSERT_TRUE(SetConfigValue("reverse_conflict_weight", "4", &config).ok());
   EXPECT_EQ(config.reverse_conflict_weight, 4.0);
