@@ -52,7 +52,8 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
       continue;
     }
     candidate.guesses = {RelativePose(query_lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset)};
-    // Prepared only if verified (enough matches may stop before it).
+    // Prepared only if verified (enough matches may stop before it); the
+    // lambda refers to this call's arguments, so `inputs` must not outlive it.
     candidate.prepare = [this, &collection, &hit, heading = db->frame.heading] {
       Result<std::shared_ptr<const PreparedMap>> prepared = Prepared(collection, hit, heading);
       return prepared.ok() ? std::move(prepared).value() : nullptr;
