@@ -102,7 +102,8 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   }
   if (key == "verify_enough_matches") return SetUnsigned(key, value, &config->verify_enough_matches);
   if (key == "prepared_map_cache_entries") {
-    return Status::InvalidArgument("prepared_map_cache_entries was replaced by prepared_map_cache_mb (MiB of prepared maps)");
+    return Status::InvalidArgument(
+        "prepared_map_cache_entries was replaced by prepared_map_cache_mb (MiB of prepared maps)");
   }
   if (key == "prepared_map_cache_mb") return SetUnsigned(key, value, &config->prepared_map_cache_mb);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);

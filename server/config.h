@@ -91,8 +91,8 @@ struct ServerConfig {
   // metres off on real logs: 3 m gave +0.05 place recall@1 over 0.5 m
   // (lmd-eval retrieval ablation). The paper methods keep the index default.
   double default_max_offset_m = 3.0;
-  // The default method's index scores exactly at most this many maps, those
-  // with the best bounds (RetrieveOptions::max_maps_scored); 0: exact. In a
+  // Once it has the top k, the default method's index stops after this many
+  // maps scored exactly, best bounds first (RetrieveOptions::max_maps_scored); 0: exact. In a
   // store with many maps of each place the bound prunes little (lmd-bench
   // load: 20-60 % of all maps scored). 200: on intel, aces, mit and fr079
   // (every 15th map queried with lmdctl, 204 queries) the best hit other than

@@ -76,8 +76,9 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
   const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
+  const size_t depth = verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted;
   // Excluded maps may take places in the index's ranking: ask for that many more.
-  options.top_k = (verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted) + exclude.size();
+  options.top_k = depth + exclude.size();
   options.method = *core_method;
   if (method == v1::METHOD_DEFAULT) {
     options.max_offset_m = config_.default_max_offset_m;
@@ -90,7 +91,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     hits->erase(std::remove_if(hits->begin(), hits->end(),
                                [&](const StoreHit& hit) { return excluded.count(hit.map_id) != 0; }),
                 hits->end());
-    if (hits->size() > options.top_k - exclude.size()) hits->resize(options.top_k - exclude.size());
+    if (hits->size() > depth) hits->resize(depth);
   }
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =

@@ -6,8 +6,8 @@
 // The collection is first seeded with robot 0's run through the demo world
 // (unless --no-seed). Then R robots, each on its own route through that world,
 // H times a second insert their newest local map and ask DetectChanges for
-// it (excluding that map itself), for S seconds; loopback only, bounded in time. Reports calls/s and
-// p50/p95/p99 latency over all calls, and errors; with --json the last line
+// it (excluding that map itself), for S seconds; loopback only, bounded in
+// time. Reports calls/s and p50/p95/p99 latency over all calls, and errors; with --json the last line
 // is {"robots": R, "rps": x, "p50_ms": a, "p95_ms": b, "p99_ms": c, "errors": n}.
 #pragma once
 

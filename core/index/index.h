@@ -16,8 +16,8 @@
 // and a few words on most features (a "wall" word) make every map a close
 // candidate. `lmd-bench index` reports both (postings read, maps scored).
 //
-// Retrieval is exact (by default). Pass 1 reads, once per distinct query word, the lists
-// of the level-0 cells that meet any of that word's boxes (4 orientations x
+// Retrieval is exact by default. Pass 1 reads, once per distinct query word,
+// the lists of the level-0 cells that meet any of that word's boxes (4 orientations x
 // the query features with the word) and gives every map an upper bound of its
 // raw K per orientation. A query feature counts in K through the one level-0
 // cell its shifted position falls in, at the finest level l where a same-word
@@ -113,7 +113,8 @@ class Index {
 
  private:
   explicit Index(const IndexOptions& options);
-  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored, RetrieveStats* stats) const;
+  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored,
+                                  RetrieveStats* stats) const;
   std::vector<MapHit> RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
 
   static constexpr uint32_t kMaxMaps = (1u << 24) - 1;  // slots fit 24 bits

@@ -60,9 +60,8 @@ struct RetrieveOptions {
   double max_word_share = 1.0;
   // Inverted file only: once top_k maps have a score, stop after this many
   // maps scored exactly (best bounds first) and rank those; 0 = no limit,
-  // which makes retrieval exact
-  // (index.h). A limit trades exactness for time in stores that hold many
-  // maps of every place, where the bound prunes little.
+  // which makes retrieval exact (index.h). A limit trades exactness for time
+  // in stores that hold many maps of every place, where the bound prunes little.
   size_t max_maps_scored = 0;
 };
 
