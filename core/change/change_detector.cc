@@ -17,7 +17,8 @@ constexpr uint64_t kChangeWordMask = (uint64_t{1} << 60) - 1;
 double Dissimilarity(uint64_t wa, double xa, double ya, uint64_t wb, double xb, double yb, double spatial_weight) {
   const double hamming = static_cast<double>(__builtin_popcountll((wa ^ wb) & kChangeWordMask));
   if (spatial_weight == 0.0) return hamming;
-  return hamming + spatial_weight * std::hypot(xa - xb, ya - yb);
+  // sqrt rather than std::hypot: the same distance here, several times faster.
+  return hamming + spatial_weight * std::sqrt((xa - xb) * (xa - xb) + (ya - yb) * (ya - yb));
 }
 
 // R(o * 90 deg) * (x, y) + offset.
@@ -62,14 +63,20 @@ Status ValidateChangeDetectorOptions(const ChangeDetectorOptions& o) {
   return Status::Ok();
 }
 
-Result<std::vector<double>> NoveltyScores(const Lmd& query, const MapHit& hit, const Lmd& db,
-                                          const ChangeDetectorOptions& options) {
-  Status st = ValidateChangeDetectorOptions(options);
-  if (!st.ok()) return st;
+namespace {
+
+// LOF of each query feature's position; it depends on the query alone, so
+// DetectChanges computes it once for all candidates.
+std::vector<double> QueryLof(const Lmd& query, const ChangeDetectorOptions& options) {
+  std::vector<Point2> positions(query.features.size());
+  for (size_t i = 0; i < positions.size(); ++i) positions[i] = {query.features[i].x, query.features[i].y};
+  return LocalOutlierFactors(positions, options.lof_k);
+}
+
+// NoveltyScores with the query's LOF given.
+std::vector<double> ScoresAgainst(const Lmd& query, const std::vector<double>& lof, const MapHit& hit, const Lmd& db,
+                                  const ChangeDetectorOptions& options) {
   const size_t nq = query.features.size();
-  std::vector<Point2> positions(nq);
-  for (size_t i = 0; i < nq; ++i) positions[i] = {query.features[i].x, query.features[i].y};
-  const std::vector<double> lof = LocalOutlierFactors(positions, options.lof_k);
   // db features sorted by x, for window look-ups.
   std::vector<uint32_t> by_x(db.features.size());
   std::iota(by_x.begin(), by_x.end(), 0u);
@@ -115,6 +122,15 @@ Result<std::vector<double>> NoveltyScores(const Lmd& query, const MapHit& hit, c
   return r;
 }
 
+}  // namespace
+
+Result<std::vector<double>> NoveltyScores(const Lmd& query, const MapHit& hit, const Lmd& db,
+                                          const ChangeDetectorOptions& options) {
+  Status st = ValidateChangeDetectorOptions(options);
+  if (!st.ok()) return st;
+  return ScoresAgainst(query, QueryLof(query, options), hit, db, options);
+}
+
 Result<std::vector<ChangeMask>> DetectChanges(const Lmd& query, const std::vector<ChangeCandidate>& candidates,
                                               const ChangeDetectorOptions& options) {
   Status st = ValidateChangeDetectorOptions(options);
@@ -124,11 +140,13 @@ Result<std::vector<ChangeMask>> DetectChanges(const Lmd& query, const std::vecto
   for (size_t c = 0; c < candidates.size(); ++c) {
     if (candidates[c].db == nullptr)
       return Status::InvalidArgument("candidate " + std::to_string(c) + " has no db descriptor");
-    auto scores = NoveltyScores(query, candidates[c].hit, *candidates[c].db, options);
-    if (!scores.ok()) return scores.status();
+  }
+  const std::vector<double> lof = candidates.empty() ? std::vector<double>() : QueryLof(query, options);
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const std::vector<double> scores = ScoresAgainst(query, lof, candidates[c].hit, *candidates[c].db, options);
     std::vector<size_t> changed;
-    for (size_t i = 0; i < scores->size(); ++i)
-      if ((*scores)[i] > options.threshold) changed.push_back(i);  // NaN (LOF-removed) compares false
+    for (size_t i = 0; i < scores.size(); ++i)
+      if (scores[i] > options.threshold) changed.push_back(i);  // NaN (LOF-removed) compares false
     // Single-linkage clusters of change features (planned and own frames are isometric).
     std::vector<size_t> parent(changed.size());
     std::iota(parent.begin(), parent.end(), size_t{0});
@@ -155,8 +173,8 @@ Result<std::vector<ChangeMask>> DetectChanges(const Lmd& query, const std::vecto
       ChangeMask& m = masks[mask_of[root]];
       const Feature& f = query.features[changed[a]];
       m.points.push_back(PlannedToOwn(query.frame, f.x, f.y));
-      m.scores.push_back((*scores)[changed[a]]);
-      m.score = std::max(m.score, (*scores)[changed[a]]);
+      m.scores.push_back(scores[changed[a]]);
+      m.score = std::max(m.score, scores[changed[a]]);
     }
     for (size_t k = first; k < masks.size(); ++k) {
       ChangeMask& m = masks[k];

@@ -16,17 +16,20 @@ std::vector<double> LocalOutlierFactors(const std::vector<Point2>& points, int k
   std::vector<double> k_distance(n);
   std::vector<std::pair<double, uint32_t>> row(n - 1);
   for (size_t i = 0; i < n; ++i) {
+    // Ranked by squared distance; only the k kept need a square root.
     size_t m = 0;
     for (size_t j = 0; j < n; ++j) {
       if (j == i) continue;
-      row[m++] = {std::hypot(points[i].x - points[j].x, points[i].y - points[j].y), static_cast<uint32_t>(j)};
+      const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y;
+      row[m++] = {dx * dx + dy * dy, static_cast<uint32_t>(j)};
     }
-    std::partial_sort(row.begin(), row.begin() + k, row.end());
+    std::nth_element(row.begin(), row.begin() + (k - 1), row.end());
+    std::sort(row.begin(), row.begin() + k);
     for (size_t r = 0; r < k; ++r) {
       neighbours[i * k + r] = row[r].second;
-      neighbour_dist[i * k + r] = row[r].first;
+      neighbour_dist[i * k + r] = std::sqrt(row[r].first);
     }
-    k_distance[i] = row[k - 1].first;
+    k_distance[i] = neighbour_dist[i * k + k - 1];
   }
   std::vector<double> lrd(n);
   for (size_t i = 0; i < n; ++i) {
