@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -52,7 +53,10 @@ void BuildPyramid(PreparedMap* m) {
   base.width = m->grid_width;
   base.height = m->grid_height;
   base.values.assign(static_cast<size_t>(base.width) * base.height, 0);
-  const double inv2s2 = 1.0 / (2.0 * sigma * sigma);
+  // The value falls with distance, so a cell's value is that of its nearest
+  // point: find the smallest squared distance per cell, then one exp per cell.
+  const double reach2 = reach * reach;
+  std::vector<double> nearest2(base.values.size(), std::numeric_limits<double>::infinity());
   for (const Point2& p : m->points) {
     const int cx = static_cast<int>(std::floor((p.x - m->grid_origin.x) / o.cell_m));
     const int cy = static_cast<int>(std::floor((p.y - m->grid_origin.y) / o.cell_m));
@@ -60,19 +64,22 @@ void BuildPyramid(PreparedMap* m) {
       const double dy = m->grid_origin.y + (y + 0.5) * o.cell_m - p.y;
       for (int x = std::max(0, cx - r); x <= std::min(base.width - 1, cx + r); ++x) {
         const double dx = m->grid_origin.x + (x + 0.5) * o.cell_m - p.x;
-        const double d2 = dx * dx + dy * dy;
-        if (d2 > reach * reach) continue;
-        const uint8_t v = static_cast<uint8_t>(std::lround(255.0 * std::exp(-d2 * inv2s2)));
-        uint8_t& cell = base.values[static_cast<size_t>(y) * base.width + x];
-        cell = std::max(cell, v);
+        double& cell = nearest2[static_cast<size_t>(y) * base.width + x];
+        cell = std::min(cell, dx * dx + dy * dy);
       }
     }
+  }
+  const double inv2s2 = 1.0 / (2.0 * sigma * sigma);
+  for (size_t k = 0; k < nearest2.size(); ++k) {
+    if (nearest2[k] <= reach2) base.values[k] = static_cast<uint8_t>(std::lround(255.0 * std::exp(-nearest2[k] * inv2s2)));
   }
   m->levels.clear();
   m->levels.push_back(std::move(base));
   for (int h = 1; h < o.levels; ++h) m->levels.push_back(NextLevel(m->levels.back(), h));
 }
 
+// Sorts the points by bucket (row-major, stable), so that a bucket, and a
+// run of buckets along a row, is one contiguous range of points.
 void BuildBuckets(PreparedMap* m) {
   const double c = m->options.neighbour_cell_m;
   m->bucket_origin = {m->min_corner.x - c, m->min_corner.y - c};
@@ -88,24 +95,36 @@ void BuildBuckets(PreparedMap* m) {
     ++m->bucket_start[cell_of[i] + 1];
   }
   for (size_t k = 0; k < cells; ++k) m->bucket_start[k + 1] += m->bucket_start[k];
-  m->bucket_points.resize(m->points.size());
+  std::vector<Point2> sorted(m->points.size());
   std::vector<uint32_t> fill(m->bucket_start.begin(), m->bucket_start.end() - 1);
-  for (size_t i = 0; i < m->points.size(); ++i) m->bucket_points[fill[cell_of[i]]++] = static_cast<uint32_t>(i);
+  for (size_t i = 0; i < m->points.size(); ++i) sorted[fill[cell_of[i]]++] = m->points[i];
+  m->points = std::move(sorted);
 }
 
-// Calls f(index) for every map point in the 3x3 buckets around p.
+// Calls f(index) for every map point in the buckets that meet the square of
+// half-width r (<= the bucket size) around p: at most 3 x 3 buckets.
 template <typename F>
-void ForNeighbourBuckets(const PreparedMap& m, const Point2& p, F&& f) {
+void ForNeighbourBuckets(const PreparedMap& m, const Point2& p, double r, F&& f) {
   const double c = m.options.neighbour_cell_m;
+  // The margin keeps a point at exactly distance r inside despite rounding.
+  r = std::min(r, c) + 1e-9;
   const double fx = std::floor((p.x - m.bucket_origin.x) / c);
   const double fy = std::floor((p.y - m.bucket_origin.y) / c);
   if (!(fx >= -1.0 && fy >= -1.0 && fx <= m.bucket_width && fy <= m.bucket_height)) return;  // also NaN
   const int bx = static_cast<int>(fx), by = static_cast<int>(fy);
-  for (int y = std::max(0, by - 1); y <= std::min(m.bucket_height - 1, by + 1); ++y) {
-    for (int x = std::max(0, bx - 1); x <= std::min(m.bucket_width - 1, bx + 1); ++x) {
-      const size_t k = static_cast<size_t>(y) * m.bucket_width + x;
-      for (uint32_t j = m.bucket_start[k]; j < m.bucket_start[k + 1]; ++j) f(m.bucket_points[j]);
-    }
+  const auto first = [&](double v, double origin, int b) {
+    return std::max({0, b - 1, static_cast<int>(std::floor((v - r - origin) / c))});
+  };
+  const auto last = [&](double v, double origin, int b, int size) {
+    return std::min({size - 1, b + 1, static_cast<int>(std::floor((v + r - origin) / c))});
+  };
+  const int x0 = first(p.x, m.bucket_origin.x, bx), x1 = last(p.x, m.bucket_origin.x, bx, m.bucket_width);
+  const int y0 = first(p.y, m.bucket_origin.y, by), y1 = last(p.y, m.bucket_origin.y, by, m.bucket_height);
+  if (x0 > x1) return;
+  for (int y = y0; y <= y1; ++y) {
+    const size_t row = static_cast<size_t>(y) * m.bucket_width;
+    const uint32_t end = m.bucket_start[row + x1 + 1];
+    for (uint32_t j = m.bucket_start[row + x0]; j < end; ++j) f(j);
   }
 }
 
@@ -116,7 +135,7 @@ void BuildNormals(PreparedMap* m) {
     const Point2 p = m->points[i];
     double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
     int n = 0;
-    ForNeighbourBuckets(*m, p, [&](uint32_t j) {
+    ForNeighbourBuckets(*m, p, m->options.normal_radius_m, [&](uint32_t j) {
       const double dx = m->points[j].x - p.x, dy = m->points[j].y - p.y;
       if (dx * dx + dy * dy > r2) return;
       sx += dx; sy += dy; sxx += dx * dx; sxy += dx * dy; syy += dy * dy;
@@ -137,7 +156,7 @@ void BuildNormals(PreparedMap* m) {
 }  // namespace
 
 size_t PreparedMap::MemoryBytes() const {
-  size_t bytes = points.size() * sizeof(Point2) * 2 + bucket_start.size() * 4 + bucket_points.size() * 4;
+  size_t bytes = points.size() * sizeof(Point2) * 2 + bucket_start.size() * 4;
   for (const LikelihoodLevel& l : levels) bytes += l.values.size();
   bytes += occupancy.cells().size();
   return bytes;
@@ -187,10 +206,10 @@ bool InFreeSpace(const PreparedMap& map, const Point2& p) {
 
 int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, double* dist2) {
   if (map.points.empty() || !std::isfinite(p.x) || !std::isfinite(p.y)) return -1;
-  double best = std::min(max_dist_m, map.options.neighbour_cell_m);
-  best *= best;
+  const double radius = std::min(max_dist_m, map.options.neighbour_cell_m);
+  double best = radius * radius;
   int best_index = -1;
-  ForNeighbourBuckets(map, p, [&](uint32_t j) {
+  ForNeighbourBuckets(map, p, radius, [&](uint32_t j) {
     const double dx = map.points[j].x - p.x, dy = map.points[j].y - p.y;
     const double d2 = dx * dx + dy * dy;
     if (d2 <= best) {

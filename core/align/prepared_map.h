@@ -51,7 +51,7 @@ struct LikelihoodLevel {
 
 struct PreparedMap {
   PreparedMapOptions options;
-  std::vector<Point2> points;       // the map's points, own frame
+  std::vector<Point2> points;       // the map's finite points, own frame, in bucket order (below)
   std::vector<Point2> normals;      // unit normal per point; (0, 0) where undefined
   Point2 min_corner, max_corner;    // bounding box of points (own frame)
   double heading = 0.0;             // rad in [0, pi/2): dominant orientation (entropy compass)
@@ -64,11 +64,11 @@ struct PreparedMap {
   // Free space of the db map (rotation 0); empty (0 x 0) when not built.
   OccupancyGrid occupancy;
 
-  // Nearest-point buckets: CSR over a neighbour_cell_m grid anchored at bucket_origin.
+  // Nearest-point buckets over a neighbour_cell_m grid anchored at
+  // bucket_origin: bucket y * w + x holds points[bucket_start[k], bucket_start[k + 1]).
   Point2 bucket_origin;
   int bucket_width = 0, bucket_height = 0;
   std::vector<uint32_t> bucket_start;   // size w*h + 1
-  std::vector<uint32_t> bucket_points;  // point indices
 
   bool empty() const { return points.empty(); }
   // Approximate heap size in bytes (for caches).
