@@ -14,14 +14,16 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
   const double wpp = std::max(0.0, options.point_to_point_weight);
   for (int it = 0; it < options.max_iterations; ++it) {
     const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    // Normal equations H delta = -g, accumulated as scalars (H symmetric).
+    double h00 = 0, h01 = 0, h02 = 0, h11 = 0, h12 = 0, h22 = 0, g0 = 0, g1 = 0, g2 = 0;
     int pairs = 0;
     // Adds residual r = a . (q - d) with Jacobian a^T [I | dq/dtheta], weight w.
-    auto add = [&](const Eigen::Vector2d& a, double r, const Eigen::Vector2d& dq_dtheta, double w) {
-      const Eigen::Vector3d J(a.x(), a.y(), a.dot(dq_dtheta));
-      H += w * J * J.transpose();
-      g += w * J * r;
+    auto add = [&](double ax, double ay, double r, double dqx, double dqy, double w) {
+      const double at = ax * dqx + ay * dqy;
+      const double wx = w * ax, wy = w * ay, wt = w * at;
+      h00 += wx * ax; h01 += wx * ay; h02 += wx * at;
+      h11 += wy * ay; h12 += wy * at; h22 += wt * at;
+      g0 += wx * r; g1 += wy * r; g2 += wt * r;
     };
     for (const Point2& p : query_points) {
       const Point2 q{pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y};
@@ -29,26 +31,25 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
       const int j = NearestPoint(db, q, max_dist, &d2);
       if (j < 0) continue;
       ++pairs;
-      const Eigen::Vector2d e(q.x - db.points[j].x, q.y - db.points[j].y);
-      const Eigen::Vector2d dq(-(q.y - pose.y), q.x - pose.x);
+      const double ex = q.x - db.points[j].x, ey = q.y - db.points[j].y;
+      const double dqx = -(q.y - pose.y), dqy = q.x - pose.x;
       const Point2 n = db.normals[j];
       const bool line = n.x != 0.0 || n.y != 0.0;
-      const double dist = line ? std::abs(n.x * e.x() + n.y * e.y()) : std::sqrt(d2);
+      const double dist = line ? std::abs(n.x * ex + n.y * ey) : std::sqrt(d2);
       const double w = dist <= options.huber_m ? 1.0 : options.huber_m / dist;
       const double wp = line ? w * wpp : w;
-      if (line) {
-        const Eigen::Vector2d nn(n.x, n.y);
-        add(nn, nn.dot(e), dq, w);
-      }
+      if (line) add(n.x, n.y, n.x * ex + n.y * ey, dqx, dqy, w);
       if (wp > 0) {
-        add(Eigen::Vector2d(1, 0), e.x(), dq, wp);
-        add(Eigen::Vector2d(0, 1), e.y(), dq, wp);
+        add(1, 0, ex, dqx, dqy, wp);
+        add(0, 1, ey, dqx, dqy, wp);
       }
     }
     if (pairs < 3) break;
+    Eigen::Matrix3d H;
+    H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
     if (ldlt.info() != Eigen::Success) break;
-    const Eigen::Vector3d delta = ldlt.solve(-g);
+    const Eigen::Vector3d delta = ldlt.solve(-Eigen::Vector3d(g0, g1, g2));
     if (!delta.allFinite()) break;
     pose.x += delta.x();
     pose.y += delta.y();
