@@ -131,7 +131,12 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   }
   if (rotations.empty()) return result;
 
-  const int top = static_cast<int>(db.levels.size()) - 1;
+  // Start at the lowest level whose block covers every window: the levels
+  // above would each score one block per rotation and prune nothing.
+  int widest = 1;
+  for (const Rotation& r : rotations) widest = std::max({widest, r.x1 - r.x0 + 1, r.y1 - r.y0 + 1});
+  int top = 0;
+  while (top + 1 < static_cast<int>(db.levels.size()) && (1 << top) < widest) ++top;
   const int top_step = 1 << top;
   std::vector<Block> candidates;
   BranchAndBound bnb(db, rotations);

@@ -205,18 +205,36 @@ bool InFreeSpace(const PreparedMap& map, const Point2& p) {
 }
 
 int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, double* dist2) {
-  if (map.points.empty() || !std::isfinite(p.x) || !std::isfinite(p.y)) return -1;
+  if (map.points.empty()) return -1;
+  const double inv_c = 1.0 / map.options.neighbour_cell_m;
   const double radius = std::min(max_dist_m, map.options.neighbour_cell_m);
+  // Bucket coordinates of p; outside [-1, size] nothing is within reach.
+  const double u = (p.x - map.bucket_origin.x) * inv_c, v = (p.y - map.bucket_origin.y) * inv_c;
+  if (!(u >= -1.0 && v >= -1.0 && u < map.bucket_width + 1.0 && v < map.bucket_height + 1.0)) return -1;  // also NaN
+  const int bx = static_cast<int>(u + 1.0) - 1, by = static_cast<int>(v + 1.0) - 1;  // floor for u, v >= -1
   double best = radius * radius;
   int best_index = -1;
-  ForNeighbourBuckets(map, p, radius, [&](uint32_t j) {
-    const double dx = map.points[j].x - p.x, dy = map.points[j].y - p.y;
-    const double d2 = dx * dx + dy * dy;
-    if (d2 <= best) {
-      best = d2;
-      best_index = static_cast<int>(j);
+  // p's own row of buckets first: the nearest point found there narrows the
+  // columns searched and usually rules the other two rows out.
+  for (const int y : {by, by - 1, by + 1}) {
+    if (y < 0 || y >= map.bucket_height) continue;
+    const double gap = (y < by ? v - (y + 1) : y > by ? y - v : 0.0) * map.options.neighbour_cell_m;
+    if (gap * gap > best) continue;
+    // The margin keeps a point at exactly the current best distance.
+    const double r = (std::sqrt(best) + 1e-9) * inv_c;
+    const int x0 = std::max(0, static_cast<int>(u - r + 1.0) - 1);
+    const int x1 = std::min(map.bucket_width - 1, static_cast<int>(u + r + 1.0) - 1);
+    if (x0 > x1) continue;
+    const size_t row = static_cast<size_t>(y) * map.bucket_width;
+    for (uint32_t j = map.bucket_start[row + x0], end = map.bucket_start[row + x1 + 1]; j < end; ++j) {
+      const double dx = map.points[j].x - p.x, dy = map.points[j].y - p.y;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 <= best) {
+        best = d2;
+        best_index = static_cast<int>(j);
+      }
     }
-  });
+  }
   if (best_index >= 0 && dist2) *dist2 = best;
   return best_index;
 }
