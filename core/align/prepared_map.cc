@@ -218,9 +218,9 @@ int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, dou
   // columns searched and usually rules the other two rows out.
   for (const int y : {by, by - 1, by + 1}) {
     if (y < 0 || y >= map.bucket_height) continue;
-    const double gap = (y < by ? v - (y + 1) : y > by ? y - v : 0.0) * map.options.neighbour_cell_m;
+    // Margins of 1e-9 m keep a point at exactly the best distance despite rounding.
+    const double gap = std::max(0.0, (y < by ? v - (y + 1) : y > by ? y - v : 0.0) * map.options.neighbour_cell_m - 1e-9);
     if (gap * gap > best) continue;
-    // The margin keeps a point at exactly the current best distance.
     const double r = (std::sqrt(best) + 1e-9) * inv_c;
     const int x0 = std::max(0, static_cast<int>(u - r + 1.0) - 1);
     const int x1 = std::min(map.bucket_width - 1, static_cast<int>(u + r + 1.0) - 1);
