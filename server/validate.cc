@@ -13,6 +13,8 @@ bool AllCharsIn(const std::string& s, const std::string& extra) {
   return true;
 }
 
+bool CoordinateOk(double v, double limit) { return std::isfinite(v) && std::fabs(v) <= limit; }
+
 // OK if v is finite and |v| <= limit; otherwise says which value is bad.
 Status CheckCoordinate(double v, double limit, const std::string& what) {
   if (std::isnan(v)) return Status::InvalidArgument(what + " is NaN");
@@ -22,6 +24,10 @@ Status CheckCoordinate(double v, double limit, const std::string& what) {
                                    std::to_string(limit) + ")");
   }
   return Status::Ok();
+}
+
+bool PoseOk(const v1::Pose2& pose, double limit) {
+  return CoordinateOk(pose.x(), limit) && CoordinateOk(pose.y(), limit) && std::isfinite(pose.theta());
 }
 
 Status CheckPose(const v1::Pose2& pose, double limit, const std::string& what) {
@@ -61,15 +67,17 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
                                    " points exceed max_points_per_map (" +
                                    std::to_string(config.max_points_per_map) + ")");
   }
+  // The messages are built only for a bad value (a map has thousands of points).
   for (int i = 0; i < map.x_size(); ++i) {
+    if (CoordinateOk(map.x(i), limit) && CoordinateOk(map.y(i), limit)) continue;
     const std::string point = where + ": point " + std::to_string(i);
     Status s = CheckCoordinate(map.x(i), limit, point + " x");
     if (s.ok()) s = CheckCoordinate(map.y(i), limit, point + " y");
-    if (!s.ok()) return s;
+    return s;
   }
   for (int i = 0; i < map.trajectory_size(); ++i) {
-    Status s = CheckPose(map.trajectory(i), limit, where + ": trajectory pose " + std::to_string(i));
-    if (!s.ok()) return s;
+    if (PoseOk(map.trajectory(i), limit)) continue;
+    return CheckPose(map.trajectory(i), limit, where + ": trajectory pose " + std::to_string(i));
   }
   if (static_cast<uint32_t>(map.scans_size()) > config.max_scans_per_map) {
     return Status::InvalidArgument(where + ": " + std::to_string(map.scans_size()) +
@@ -79,8 +87,7 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
   for (int i = 0; i < map.scans_size(); ++i) {
     const v1::Scan& scan = map.scans(i);
     const std::string name = where + ": scan " + std::to_string(i);
-    Status s = CheckPose(scan.pose(), limit, name + " pose");
-    if (!s.ok()) return s;
+    if (!PoseOk(scan.pose(), limit)) return CheckPose(scan.pose(), limit, name + " pose");
     if (!(scan.angle_step() > 0) || !std::isfinite(scan.angle_step()) || !std::isfinite(scan.first_angle())) {
       return Status::InvalidArgument(name + ": angle_step must be a positive finite number of radians");
     }

@@ -178,6 +178,34 @@ TEST_F(MapServiceTest, NanAndInfiniteCoordinatesAreRejectedNamingThePoint) {
   EXPECT_NE(status.error_message().find("point 3 y is infinite"), std::string::npos) << status.error_message();
 }
 
+TEST_F(MapServiceTest, BadPosesAndFarCoordinatesAreRejectedNamingTheValue) {
+  TestServer server(dir_.path());
+  v1::LocalMap far_map = SquareRoomMap();
+  far_map.set_x(2, 1.0e6f);  // mm sent as m
+  grpc::Status status = InsertOne(server, far_map);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("point 2 x = "), std::string::npos) << status.error_message();
+  EXPECT_NE(status.error_message().find("max_abs_coordinate_m"), std::string::npos) << status.error_message();
+
+  v1::LocalMap bad_trajectory = SquareRoomMap();
+  const std::string bad_pose = "trajectory pose " + std::to_string(bad_trajectory.trajectory_size() + 1);
+  bad_trajectory.add_trajectory()->set_x(1.0);
+  bad_trajectory.add_trajectory()->set_theta(std::numeric_limits<double>::quiet_NaN());
+  status = InsertOne(server, bad_trajectory);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find(bad_pose + ".theta is not finite"), std::string::npos)
+      << status.error_message();
+
+  v1::LocalMap bad_scan = SquareRoomMap();
+  v1::Scan* scan = bad_scan.add_scans();
+  scan->set_angle_step(0.01);
+  scan->set_max_range(10.0);
+  scan->mutable_pose()->set_y(std::numeric_limits<double>::infinity());
+  status = InsertOne(server, bad_scan);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("scan 0 pose.y is infinite"), std::string::npos) << status.error_message();
+}
+
 TEST_F(MapServiceTest, MismatchedArraysAndBadNamesAreRejected) {
   TestServer server(dir_.path());
   v1::LocalMap uneven = SquareRoomMap();
