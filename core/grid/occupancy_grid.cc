@@ -11,8 +11,11 @@ constexpr int64_t kMaxCells = 16 * 1024 * 1024;  // hard cap: 16 M cells
 
 // Walks the cells crossed by the segment from `a` to `b` (grid axes, m),
 // marking them free; the cell holding `b` is left alone when `stop_before_end`.
-// Amanatides-Woo traversal, stops at the grid border.
-void TraceFree(OccupancyGrid& grid, double ax, double ay, double bx, double by, bool stop_before_end) {
+// Amanatides-Woo traversal, stops at the grid border. `cells` is the grid's
+// row-major storage (the hot loop writes it directly: one beam crosses
+// dozens of cells and a map has thousands of beams).
+void TraceFree(const OccupancyGrid& grid, uint8_t* cells, double ax, double ay, double bx, double by,
+               bool stop_before_end) {
   const double cell = grid.cell_m();
   const double gx = (ax - grid.min_x()) / cell, gy = (ay - grid.min_y()) / cell;
   const double ex = (bx - grid.min_x()) / cell, ey = (by - grid.min_y()) / cell;
@@ -26,20 +29,27 @@ void TraceFree(OccupancyGrid& grid, double ax, double ay, double bx, double by, 
   const double t_dy = dy != 0 ? std::abs(1.0 / dy) : inf;
   double t_x = dx > 0 ? (ix + 1 - gx) * t_dx : dx < 0 ? (gx - ix) * t_dx : inf;
   double t_y = dy > 0 ? (iy + 1 - gy) * t_dy : dy < 0 ? (gy - iy) * t_dy : inf;
+  const int width = grid.width(), height = grid.height();
+  const long row_step = step_y > 0 ? width : -width;
+  size_t k = static_cast<size_t>(iy) * width + ix;
+  constexpr uint8_t kFree = static_cast<uint8_t>(CellState::kFree);
   const int max_steps = std::abs(end_x - ix) + std::abs(end_y - iy) + 1;
   for (int n = 0; n <= max_steps; ++n) {
     const bool at_end = ix == end_x && iy == end_y;
     if (at_end && stop_before_end) return;
-    grid.set(ix, iy, CellState::kFree);
+    cells[k] = kFree;
     if (at_end) return;
     if (t_x < t_y) {
       ix += step_x;
+      if (ix < 0 || ix >= width) return;
+      k += step_x;
       t_x += t_dx;
     } else {
       iy += step_y;
+      if (iy < 0 || iy >= height) return;
+      k += row_step;
       t_y += t_dy;
     }
-    if (!grid.Contains(ix, iy)) return;
   }
 }
 
@@ -140,6 +150,7 @@ OccupancyGrid BuildOccupancyGrid(const LocalMap& map, double rotation, const Gri
   if (!options.free_space) {
     // Occupied cells only (below).
   } else if (!map.scans.empty()) {
+    uint8_t* cells = grid.mutable_cells();
     for (const Scan& sc : map.scans) {
       const Point2 o = rot(sc.pose.x, sc.pose.y);
       const double clear = std::min<double>(options.no_return_clear_m, sc.max_range);
@@ -149,7 +160,7 @@ OccupancyGrid BuildOccupancyGrid(const LocalMap& map, double rotation, const Gri
         const bool hit = r < sc.max_range;
         const double len = hit ? r : clear;
         const double a = sc.pose.theta + sc.first_angle + static_cast<double>(i) * sc.angle_step - rotation;
-        TraceFree(grid, o.x, o.y, o.x + len * std::cos(a), o.y + len * std::sin(a), hit);
+        TraceFree(grid, cells, o.x, o.y, o.x + len * std::cos(a), o.y + len * std::sin(a), hit);
       }
     }
   } else if (!map.trajectory.empty()) {

@@ -61,6 +61,7 @@ class OccupancyGrid {
   }
   // Row-major cell states (index iy * width + ix).
   const std::vector<uint8_t>& cells() const { return cells_; }
+  uint8_t* mutable_cells() { return cells_.data(); }
 
   // Own-frame point -> grid axes, and back.
   Point2 ToGrid(const Point2& own) const;
