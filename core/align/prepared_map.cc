@@ -211,7 +211,7 @@ int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, dou
   // Bucket coordinates of p; outside [-1, size] nothing is within reach.
   const double u = (p.x - map.bucket_origin.x) * inv_c, v = (p.y - map.bucket_origin.y) * inv_c;
   if (!(u >= -1.0 && v >= -1.0 && u < map.bucket_width + 1.0 && v < map.bucket_height + 1.0)) return -1;  // also NaN
-  const int bx = static_cast<int>(u + 1.0) - 1, by = static_cast<int>(v + 1.0) - 1;  // floor for u, v >= -1
+  const int by = static_cast<int>(v + 1.0) - 1;  // floor, as v >= -1
   double best = radius * radius;
   int best_index = -1;
   // p's own row of buckets first: the nearest point found there narrows the
