@@ -36,6 +36,33 @@ int64_t ScoreAt(const LikelihoodLevel& level, const Rotation& r, int dx, int dy)
   return sum;
 }
 
+// ScoreAt at the four offsets (dx, dy), (dx + half, dy), (dx, dy + half),
+// (dx + half, dy + half) in one pass over the points: a block's children.
+void ScoreChildren(const LikelihoodLevel& level, const Rotation& r, int dx, int dy, int half, int64_t sums[4]) {
+  const int ox = dx + level.pad, oy = dy + level.pad;
+  const uint8_t* values = level.values.data();
+  const unsigned w = static_cast<unsigned>(level.width), h = static_cast<unsigned>(level.height);
+  const unsigned step = static_cast<unsigned>(half);
+  int64_t s00 = 0, s10 = 0, s01 = 0, s11 = 0;
+  const size_t n = r.cx.size();
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned x = static_cast<unsigned>(r.cx[i] + ox), y = static_cast<unsigned>(r.cy[i] + oy);
+    const unsigned x2 = x + step, y2 = y + step;
+    const bool in_x = x < w, in_x2 = x2 < w;
+    if (y < h) {
+      const uint8_t* row = values + static_cast<size_t>(y) * w;
+      if (in_x) s00 += row[x];
+      if (in_x2) s10 += row[x2];
+    }
+    if (y2 < h) {
+      const uint8_t* row = values + static_cast<size_t>(y2) * w;
+      if (in_x) s01 += row[x];
+      if (in_x2) s11 += row[x2];
+    }
+  }
+  sums[0] = s00, sums[1] = s01, sums[2] = s10, sums[3] = s11;
+}
+
 class BranchAndBound {
  public:
   BranchAndBound(const PreparedMap& db, const std::vector<Rotation>& rotations)
@@ -51,15 +78,16 @@ class BranchAndBound {
       }
       const int half = 1 << (level - 1);
       const Rotation& r = rotations_[c.rotation];
+      int64_t sums[4];  // (0, 0), (0, half), (half, 0), (half, half)
+      ScoreChildren(db_.levels[level - 1], r, c.dx, c.dy, half, sums);
       std::vector<Block> children;
       children.reserve(4);
-      for (int ox = 0; ox <= half; ox += half) {
+      for (int ox = 0, k = 0; ox <= half; ox += half) {
         const int dx = c.dx + ox;
-        if (dx > r.x1) continue;
-        for (int oy = 0; oy <= half; oy += half) {
+        for (int oy = 0; oy <= half; oy += half, ++k) {
           const int dy = c.dy + oy;
-          if (dy > r.y1) continue;
-          children.push_back({c.rotation, dx, dy, ScoreAt(db_.levels[level - 1], r, dx, dy)});
+          if (dx > r.x1 || dy > r.y1) continue;
+          children.push_back({c.rotation, dx, dy, sums[k]});
           ++evaluations_;
         }
       }
