@@ -221,11 +221,17 @@ KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t
     int64_t mode = 0;
     size_t mode_count = 0;
     if (q.bins) {
-      s->bin_counts.assign(static_cast<size_t>(q.bins) * q.bins, 0);
-      for (const KernelScratch::Match& m : s->matches) ++s->bin_counts[m.bin];
-      for (size_t b = 0; b < s->bin_counts.size(); ++b) {
-        if (s->bin_counts[b] > mode_count) mode_count = s->bin_counts[b], mode = static_cast<int64_t>(b);
+      // Counted as the matches come (the first bin to reach a count, or a
+      // smaller one reaching it later, is the mode), then the touched bins
+      // are zeroed again: far fewer steps than the bins x bins array.
+      if (s->bin_counts.size() < static_cast<size_t>(q.bins) * q.bins) {
+        s->bin_counts.assign(static_cast<size_t>(q.bins) * q.bins, 0);
       }
+      for (const KernelScratch::Match& m : s->matches) {
+        const size_t count = ++s->bin_counts[m.bin];
+        if (count > mode_count || (count == mode_count && m.bin < mode)) mode_count = count, mode = m.bin;
+      }
+      for (const KernelScratch::Match& m : s->matches) s->bin_counts[m.bin] = 0;
     } else {
       std::sort(s->matches.begin(), s->matches.end(),
                 [](const KernelScratch::Match& a, const KernelScratch::Match& b) { return a.bin < b.bin; });

@@ -126,7 +126,7 @@ struct KernelScratch {
   struct Match { int64_t bin; int32_t dx, dy; };
   std::vector<Group> groups;
   std::vector<Match> matches;
-  std::vector<uint32_t> bin_counts;  // matches per offset bin (when query.bins > 0)
+  std::vector<uint32_t> bin_counts;  // matches per offset bin (when query.bins > 0); all zero between uses
   // Groups with several features on a side: their distinct db cells per level,
   // sorted (cells[offsets[k * (L + 1) + l] ...]).
   std::vector<uint32_t> multi;
