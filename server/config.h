@@ -109,10 +109,11 @@ struct ServerConfig {
   // 25 vs 14.4 ms per robot-second, p99 875 vs 25 ms (saturated).
   bool inner_words = false;
   // Memory (MiB) for prepared db maps kept for verification (about 100 KB
-  // each on the demo world; preparing one costs about 0.5 ms, lmd-microbench). A store with many
-  // robots verifies mostly recent maps: lmd-bench load at 90 robots (about
-  // 1900 maps) spent 11-12 vs 13-14 ms of CPU per robot-second with room for
-  // every map vs for 500, at 370 vs 181 MB peak RSS. 0: no cache.
+  // each on the demo world; preparing one costs about 0.5 ms, lmd-microbench).
+  // A store with many robots verifies mostly recent maps: lmd-bench load at
+  // 90 robots (about 1900 maps) spent 11-12 vs 13-14 ms of CPU per
+  // robot-second with room for every map vs for 500, at 370 vs 181 MB peak
+  // RSS. 0: no cache.
   uint32_t prepared_map_cache_mb = 1024;
 
   // Prometheus text metrics over HTTP at http://HOST:PORT/metrics. Empty: off.
