@@ -8,15 +8,18 @@ namespace {
 
 // H(x') + H(y') of the points turned by -theta, with linear (two-bin) soft
 // binning so that the score varies smoothly with theta. `xs`, `ys` are
-// centred on the centroid; `hist` is scratch of 2 * bins doubles.
+// centred on the centroid; `hist` is scratch of 2 * bins doubles, all zero
+// on entry and on return.
 double ProjectionEntropy(const std::vector<double>& xs, const std::vector<double>& ys, double theta,
                          double bin_m, double half_extent, std::vector<double>& hist) {
   const size_t bins = hist.size() / 2;
-  std::fill(hist.begin(), hist.end(), 0.0);
   const double c = std::cos(theta), s = std::sin(theta);
   const double inv = 1.0 / bin_m;
   double* hx = hist.data();
   double* hy = hist.data() + bins;
+  // The points fill only part of each axis's bins: track the range touched,
+  // so that only it is read (and zeroed for the next angle).
+  size_t lo_u = bins, hi_u = 0, lo_v = bins, hi_v = 0;
   for (size_t i = 0; i < xs.size(); ++i) {
     const double u = (c * xs[i] + s * ys[i] + half_extent) * inv;
     const double v = (-s * xs[i] + c * ys[i] + half_extent) * inv;
@@ -27,12 +30,21 @@ double ProjectionEntropy(const std::vector<double>& xs, const std::vector<double
     hx[iu + 1] += wu;
     hy[iv] += 1.0 - wv;
     hy[iv + 1] += wv;
+    lo_u = std::min(lo_u, iu), hi_u = std::max(hi_u, iu + 1);
+    lo_v = std::min(lo_v, iv), hi_v = std::max(hi_v, iv + 1);
   }
   const double n = static_cast<double>(xs.size());
   double h = 0.0;
-  for (size_t b = 0; b < 2 * bins; ++b) {
-    const double p = hist[b] / n;
-    if (p > 0) h -= p * std::log(p);
+  auto add_and_clear = [&](double* axis, size_t lo, size_t hi) {
+    for (size_t b = lo; b <= hi; ++b) {
+      const double p = axis[b] / n;
+      if (p > 0) h -= p * std::log(p);
+      axis[b] = 0.0;
+    }
+  };
+  if (!xs.empty()) {
+    add_and_clear(hx, lo_u, hi_u);
+    add_and_clear(hy, lo_v, hi_v);
   }
   return h;
 }
