@@ -36,8 +36,8 @@ int64_t ScoreAt(const LikelihoodLevel& level, const Rotation& r, int dx, int dy)
   return sum;
 }
 
-// ScoreAt at the four offsets (dx, dy), (dx + half, dy), (dx, dy + half),
-// (dx + half, dy + half) in one pass over the points: a block's children.
+// ScoreAt of a block's four children in one pass over the points: sums[k]
+// for the offsets (dx, dy) + (0, 0), (0, half), (half, 0), (half, half).
 void ScoreChildren(const LikelihoodLevel& level, const Rotation& r, int dx, int dy, int half, int64_t sums[4]) {
   const int ox = dx + level.pad, oy = dy + level.pad;
   const uint8_t* values = level.values.data();
