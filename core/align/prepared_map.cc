@@ -101,30 +101,20 @@ void BuildBuckets(PreparedMap* m) {
   m->points = std::move(sorted);
 }
 
-// Calls f(index) for every map point in the buckets that meet the square of
-// half-width r (<= the bucket size) around p: at most 3 x 3 buckets.
+// Calls f(index) for every map point in the 3x3 buckets around p (a row of
+// buckets is one contiguous range of points).
 template <typename F>
-void ForNeighbourBuckets(const PreparedMap& m, const Point2& p, double r, F&& f) {
+void ForNeighbourBuckets(const PreparedMap& m, const Point2& p, F&& f) {
   const double c = m.options.neighbour_cell_m;
-  // The margin keeps a point at exactly distance r inside despite rounding.
-  r = std::min(r, c) + 1e-9;
   const double fx = std::floor((p.x - m.bucket_origin.x) / c);
   const double fy = std::floor((p.y - m.bucket_origin.y) / c);
   if (!(fx >= -1.0 && fy >= -1.0 && fx <= m.bucket_width && fy <= m.bucket_height)) return;  // also NaN
   const int bx = static_cast<int>(fx), by = static_cast<int>(fy);
-  const auto first = [&](double v, double origin, int b) {
-    return std::max({0, b - 1, static_cast<int>(std::floor((v - r - origin) / c))});
-  };
-  const auto last = [&](double v, double origin, int b, int size) {
-    return std::min({size - 1, b + 1, static_cast<int>(std::floor((v + r - origin) / c))});
-  };
-  const int x0 = first(p.x, m.bucket_origin.x, bx), x1 = last(p.x, m.bucket_origin.x, bx, m.bucket_width);
-  const int y0 = first(p.y, m.bucket_origin.y, by), y1 = last(p.y, m.bucket_origin.y, by, m.bucket_height);
+  const int x0 = std::max(0, bx - 1), x1 = std::min(m.bucket_width - 1, bx + 1);
   if (x0 > x1) return;
-  for (int y = y0; y <= y1; ++y) {
+  for (int y = std::max(0, by - 1); y <= std::min(m.bucket_height - 1, by + 1); ++y) {
     const size_t row = static_cast<size_t>(y) * m.bucket_width;
-    const uint32_t end = m.bucket_start[row + x1 + 1];
-    for (uint32_t j = m.bucket_start[row + x0]; j < end; ++j) f(j);
+    for (uint32_t j = m.bucket_start[row + x0], end = m.bucket_start[row + x1 + 1]; j < end; ++j) f(j);
   }
 }
 
@@ -135,7 +125,7 @@ void BuildNormals(PreparedMap* m) {
     const Point2 p = m->points[i];
     double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
     int n = 0;
-    ForNeighbourBuckets(*m, p, m->options.normal_radius_m, [&](uint32_t j) {
+    ForNeighbourBuckets(*m, p, [&](uint32_t j) {
       const double dx = m->points[j].x - p.x, dy = m->points[j].y - p.y;
       if (dx * dx + dy * dy > r2) return;
       sx += dx; sy += dy; sxx += dx * dx; sxy += dx * dy; syy += dy * dy;
