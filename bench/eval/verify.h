@@ -17,7 +17,7 @@ namespace lmd::eval {
 
 struct VerifyConfig {
   double window_m = 1.0;          // m, translation window around each guess (per axis)
-  double window_deg = 5.0;        // deg, rotation window around each guess
+  double window_deg = 3.0;        // deg, rotation window around each guess (ScanMatchOptions)
   bool quarter_turns = false;     // also try each guess turned by 90, 180, 270 deg (the kernel
                                   // already chose the best of the 4 orientations)
   bool global_fallback = true;    // guess-free search when the guided match is poor
