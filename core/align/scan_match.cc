@@ -37,12 +37,14 @@ ScanMatch Match(const PreparedQuery& query, const PreparedMap& db, const std::ve
   m.search_evaluations = coarse.evaluations;
   m.guess = coarse.region < region_guess.size() ? region_guess[coarse.region] : -1;
   if (!coarse.found) return m;
-  const Overlap before = MeasureOverlap(query.points, db, coarse.pose, options.inlier_radius_m);
-  const Pose2 refined = RefinePose(query.icp_points, db, coarse.pose, options.icp);
-  const Overlap after = MeasureOverlap(query.points, db, refined, options.inlier_radius_m);
-  const bool keep_refined = after.fraction >= before.fraction;
-  const Overlap& o = keep_refined ? after : before;
-  m.pose = keep_refined ? refined : coarse.pose;
+  m.pose = RefinePose(query.icp_points, db, coarse.pose, options.icp);
+  Overlap o = MeasureOverlap(query.points, db, m.pose, options.inlier_radius_m);
+  // ICP can slide off a poor lattice pose: below recheck_below the lattice
+  // pose is kept if it overlaps more. Above, the refined pose stands.
+  if (o.fraction < options.recheck_below) {
+    const Overlap lattice = MeasureOverlap(query.points, db, coarse.pose, options.inlier_radius_m);
+    if (lattice.fraction > o.fraction) o = lattice, m.pose = coarse.pose;
+  }
   m.score = o.fraction;
   m.inlier_rms_m = o.rms_m;
   m.inliers = o.inliers;

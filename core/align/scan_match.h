@@ -29,6 +29,9 @@ struct ScanMatchOptions {
   PreparedMapOptions map;          // used where this module prepares a db map itself
   double inlier_radius_m = 0.3;    // m; score radius (place-recall protocol: 0.3)
   size_t min_points = 10;          // a query or db map with fewer points is not matched (score 0)
+  // A refined pose whose score is below this is compared with the search's
+  // lattice pose, and the better kept (1: always compared).
+  double recheck_below = 0.5;
   double search_cell_m = 0.3;      // m; query points kept one per cell for the search (0 = all)
   // m; query points kept one per cell for ICP (0 = all). 0.2 gave lmd-eval's
   // best the same place recall and pose error as all points (orebro, fr101,
