@@ -22,7 +22,6 @@ struct RetrieveScratch {
   std::vector<uint32_t> tables;  // kLmd pass 1: per list read, see RetrieveLmd
   std::vector<uint32_t> term_gains;
   std::vector<uint8_t> term_o;
-  std::vector<uint64_t> keys;
   KernelScratch kernel;
 };
 
@@ -31,7 +30,9 @@ RetrieveScratch& Scratch() {
   return scratch;
 }
 
-bool InInt16(int32_t v) { return v >= -32768 && v <= 32767; }
+// The level-0 cell of a posting key (PostingKey).
+int32_t CellX(uint64_t key) { return static_cast<int16_t>((key >> 16) & 0xFFFF); }
+int32_t CellY(uint64_t key) { return static_cast<int16_t>(key & 0xFFFF); }
 
 }  // namespace
 
@@ -84,7 +85,7 @@ Status Index::AddPoseFeatures(uint64_t id, std::vector<PoseFeature> features) {
   for (const PoseFeature& f : features) {
     const uint64_t key = PostingKey(f.word, FloorDiv(f.x, cell0_), FloorDiv(f.y, cell0_));
     auto [it, inserted] = lists_.try_emplace(key);
-    if (inserted) word_keys_[f.word].push_back(key);
+    if (inserted) word_lists_[f.word].push_back({key, &it->second});
     ++word_postings_[f.word];
     const int32_t fine = cell0_ >> options_.pyramid_levels, side = 1 << options_.pyramid_levels;
     const int32_t sx = (f.x - FloorDiv(f.x, cell0_) * cell0_) / fine, sy = (f.y - FloorDiv(f.y, cell0_) * cell0_) / fine;
@@ -126,9 +127,10 @@ bool Index::Remove(uint64_t id) {
                list.end());
     if (list.empty()) {
       lists_.erase(it);
-      auto& keys = word_keys_[f.word];
-      keys.erase(std::find(keys.begin(), keys.end(), key));
-      if (keys.empty()) word_keys_.erase(f.word);
+      auto& word_lists = word_lists_[f.word];
+      word_lists.erase(std::find_if(word_lists.begin(), word_lists.end(),
+                                    [key](const WordList& l) { return l.key == key; }));
+      if (word_lists.empty()) word_lists_.erase(f.word);
     }
   }
   for (const PoseFeature& f : features) {
@@ -168,7 +170,7 @@ size_t Index::MemoryBytes() const {
   constexpr size_t kNode = 48;  // rough per-entry cost of an unordered_map node + bucket
   size_t bytes = 0;
   for (const auto& kv : lists_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(Posting);
-  for (const auto& kv : word_keys_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(uint64_t);
+  for (const auto& kv : word_lists_) bytes += kNode + sizeof(kv.second) + kv.second.capacity() * sizeof(WordList);
   bytes += word_postings_.size() * kNode;
   for (const auto& f : slot_features_) bytes += sizeof(f) + f.capacity() * sizeof(PoseFeature);
   bytes += id_to_slot_.size() * kNode + slot_id_.capacity() * (sizeof(uint64_t) + 1);
@@ -215,7 +217,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     int32_t lo_x[9], hi_x[9], lo_y[9], hi_y[9];
   };
   std::vector<Term> terms;
-  std::vector<uint64_t>& keys = sc.keys;
+  std::vector<const WordList*> lists;
   std::vector<const Term*> active;
   // One posting list to read, with what its postings add (see below).
   struct ListRead {
@@ -247,8 +249,13 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     const uint32_t word = q.features[i].word;
     size_t e = i + 1;
     while (e < nq && q.features[e].word == word) ++e;
+    const uint32_t query_count = static_cast<uint32_t>(e - i);
+    const auto word_lists = word_lists_.find(word);
+    if (word_lists == word_lists_.end()) {
+      i = e;
+      continue;
+    }
     terms.clear();
-    keys.clear();
     for (int o = 0; o < 4; ++o) {
       for (size_t k = i; k < e; ++k) {
         Term t;
@@ -261,26 +268,31 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
           t.lo_y[l] = FloorDiv(y - box, cw);
           t.hi_y[l] = FloorDiv(y + box, cw);
         }
-        for (int32_t cx = t.lo_x[0]; cx <= t.hi_x[0]; ++cx)
-          for (int32_t cy = t.lo_y[0]; cy <= t.hi_y[0]; ++cy)
-            if (InInt16(cx) && InInt16(cy)) keys.push_back(PostingKey(word, cx, cy));
         terms.push_back(t);
       }
     }
-    const uint32_t query_count = static_cast<uint32_t>(e - i);
     i = e;
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    for (uint64_t key : keys) {
-      auto it = lists_.find(key);
-      if (it == lists_.end()) continue;
-      const int32_t cx = static_cast<int16_t>((key >> 16) & 0xFFFF), cy = static_cast<int16_t>(key & 0xFFFF);
+    // The word's lists whose level-0 cell meets a term's box, in key order.
+    lists.clear();
+    for (const WordList& word_list : word_lists->second) {
+      const int32_t cx = CellX(word_list.key), cy = CellY(word_list.key);
+      for (const Term& t : terms) {
+        if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) {
+          lists.push_back(&word_list);
+          break;
+        }
+      }
+    }
+    std::sort(lists.begin(), lists.end(), [](const WordList* a, const WordList* b) { return a->key < b->key; });
+    for (const WordList* word_list : lists) {
+      const std::vector<Posting>& postings = *word_list->postings;
+      const int32_t cx = CellX(word_list->key), cy = CellY(word_list->key);
       active.clear();
       for (const Term& t : terms)
         if (cx >= t.lo_x[0] && cx <= t.hi_x[0] && cy >= t.lo_y[0] && cy <= t.hi_y[0]) active.push_back(&t);
       // The cell splits into side x side finest cells; per finest cell: the
       // gains of the active terms summed per orientation (table[sub * 4 + o]).
-      ListRead read{&it->second, 0, static_cast<uint32_t>(tables.size()), query_count, true,
+      ListRead read{&postings, 0, static_cast<uint32_t>(tables.size()), query_count, true,
                     static_cast<uint32_t>(term_o.size()), 0};
       int terms_per_orientation[4] = {0, 0, 0, 0};
       for (const Term* t : active) read.one_term_each &= ++terms_per_orientation[t->o] <= 1;
@@ -309,7 +321,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
       }
       for (int32_t k = 0; k < cells * 4; ++k) table[cells * 4 + k] = std::min(table[k], gain[levels]);
       ++stats->lists_read;
-      stats->postings_read += it->second.size();
+      stats->postings_read += postings.size();
       reads.push_back(read);
     }
   }
@@ -429,11 +441,11 @@ std::vector<MapHit> Index::RetrieveBow(const PreparedLmdQuery& q, size_t top_k, 
     while (e < nq && q.features[e].word == word) ++e;
     const uint32_t query_count = static_cast<uint32_t>(e - i);
     i = e;
-    auto keys = word_keys_.find(word);
-    if (keys == word_keys_.end()) continue;
+    auto word_lists = word_lists_.find(word);
+    if (word_lists == word_lists_.end()) continue;
     sc.word_touched.clear();
-    for (uint64_t key : keys->second) {
-      const auto& list = lists_.find(key)->second;
+    for (const WordList& word_list : word_lists->second) {
+      const auto& list = *word_list.postings;
       ++stats->lists_read;
       stats->postings_read += list.size();
       for (const Posting& p : list) {

@@ -127,7 +127,13 @@ class Index {
   IndexOptions options_;
   int32_t cell0_ = 100;  // pose units
   std::unordered_map<uint64_t, std::vector<Posting>> lists_;  // PostingKey -> postings
-  std::unordered_map<uint32_t, std::vector<uint64_t>> word_keys_;  // word -> its keys (kBow)
+  // A word's lists: Retrieve walks them instead of looking up every cell a
+  // query box could meet (the lists_ nodes, hence the pointers, never move).
+  struct WordList {
+    uint64_t key;
+    const std::vector<Posting>* postings;
+  };
+  std::unordered_map<uint32_t, std::vector<WordList>> word_lists_;
   std::unordered_map<uint32_t, size_t> word_postings_;              // word -> postings
   std::unordered_map<uint64_t, uint32_t> id_to_slot_;
   std::vector<uint64_t> slot_id_;                    // valid where slot_used_
