@@ -277,7 +277,8 @@ KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t
           const int64_t* end = s->cells.data() + s->offsets[k * nl + static_cast<size_t>(l) + 1];
           const int64_t cell = PackPair(fx >> (levels - l), fy >> (levels - l));
           const int64_t* run = std::lower_bound(begin, end, cell);
-          if (run == end || *run != cell) continue;
+          // Cells nest: no db feature in this cell, none in its finer cells.
+          if (run == end || *run != cell) break;
           const size_t first = static_cast<size_t>(run - s->cells.data());
           if (s->used[first] < s->run[first]) {
             ++s->used[first];
