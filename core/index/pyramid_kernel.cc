@@ -178,12 +178,14 @@ KernelScore ScoreLmdMap(const PreparedLmdQuery& q, const PoseFeature* db, size_t
         s->cells.push_back(PackPair(q.fine_div(db[j].x) >> (levels - l), q.fine_div(db[j].y) >> (levels - l)));
       std::sort(s->cells.begin() + static_cast<long>(begin), s->cells.end());
       // Keep distinct cells, their counts in run.
+      const size_t n = s->cells.size();
+      if (s->run.size() < n) s->run.resize(n);
+      int64_t* cells = s->cells.data();
       size_t out = begin;
-      for (size_t a = begin; a < s->cells.size();) {
+      for (size_t a = begin; a < n;) {
         size_t b = a + 1;
-        while (b < s->cells.size() && s->cells[b] == s->cells[a]) ++b;
-        s->cells[out] = s->cells[a];
-        if (s->run.size() <= out) s->run.resize(out + 1);
+        while (b < n && cells[b] == cells[a]) ++b;
+        cells[out] = cells[a];
         s->run[out] = static_cast<uint32_t>(b - a);
         ++out;
         a = b;
