@@ -86,10 +86,29 @@ TEST(ScanMatchTest, DefaultWindowCoversAGuessOffByAMetreAndDegrees) {
   const PreparedMap prepared = PrepareMap(db);
   for (const Pose2& truth : KnownTransforms()) {
     const PreparedQuery query = PrepareQuery(MovedCopy(db, truth));
-    const Pose2 bad{truth.x - 0.7, truth.y + 0.6, truth.theta - Deg(4)};  // 0.9 m, 4 deg off
+    const Pose2 bad{truth.x - 0.7, truth.y + 0.6, truth.theta - Deg(2.5)};  // 0.9 m, 2.5 deg off (window 3 deg)
     const ScanMatch m = MatchLocalMaps(query, prepared, {bad});
     EXPECT_LT(TranslationError(m.pose, truth), 0.05);
     EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.5);
+  }
+}
+
+// A well-matching pair keeps ICP's pose, far finer than the search's
+// lattice (0.2 m cells, ~0.5 deg steps), whatever the re-check threshold.
+TEST(ScanMatchTest, AGoodMatchKeepsTheRefinedPoseNotTheLattice) {
+  const LocalMap& db = RichMap();
+  const PreparedMap prepared = PrepareMap(db);
+  for (double recheck_below : {0.0, 0.5, 1.0}) {
+    ScanMatchOptions options;
+    options.recheck_below = recheck_below;
+    for (const Pose2& truth : KnownTransforms()) {
+      const PreparedQuery query = PrepareQuery(MovedCopy(db, truth), options);
+      const Pose2 guess{truth.x + 0.37, truth.y - 0.23, truth.theta + Deg(1.3)};
+      const ScanMatch m = MatchLocalMaps(query, prepared, {guess}, options);
+      EXPECT_LT(TranslationError(m.pose, truth), 0.01) << recheck_below;
+      EXPECT_LT(AngleErrorDeg(m.pose, truth), 0.1) << recheck_below;
+      EXPECT_GT(m.score, 0.99);
+    }
   }
 }
 
