@@ -39,7 +39,9 @@ struct ServerConfig {
   // fsync the write-ahead log before acknowledging an insert. Off: an
   // acknowledged insert survives a crash of lmdd (the WAL is written before the
   // ack) but not a power loss or kernel crash. On: it survives those too, at
-  // the cost of one fsync per insert call.
+  // the cost of one fsync per insert call: single-map inserts (lmd-bench
+  // fill --maps 3000 --batch 1, 2-core VM) 577 and 571 per second off, 447
+  // and 428 on (-24 %).
   bool sync_writes = false;
   // Serve on a non-loopback address without TLS and tokens. Off by default:
   // lmdd then refuses to listen anywhere but loopback.
