@@ -54,6 +54,8 @@ struct MethodSpec {
   // Geometric change masks (core/change/geometric_changes.h) against the
   // hits verification matched, ranked before the descriptor's masks.
   bool geometric_masks = false;
+  // Geometric masks ranked by evidence (free-space margin, range); false: by point count.
+  bool masks_by_evidence = true;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

@@ -142,6 +142,10 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.geometric_masks = false;
   a.change_eval = true;
   v.push_back(a);
+  a = ablation("abl_mask_count", "geometric change masks ranked by point count (no free-space margin or range weight)");
+  a.masks_by_evidence = false;
+  a.change_eval = true;
+  v.push_back(a);
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
   a.verify_top_n = 20;
   v.push_back(a);
@@ -426,7 +430,8 @@ MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t
 
 // First 1-based mask rank at which the task succeeds (0 = never), per threshold.
 void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
-                    Planner planner, const Verifier* verifier, bool geometric, std::vector<size_t>* first,
+                    Planner planner, const Verifier* verifier, bool geometric, bool by_evidence,
+                    std::vector<size_t>* first,
                     size_t* masks_default, size_t* false_default) {
   const EvalQuery& q = d.queries[qi];
   std::vector<ChangeCandidate> cands;
@@ -455,7 +460,9 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
       for (const Scored& h : run.top) {
         if (h.matched) aligned.push_back({h.db, h.pose});
       }
-      std::vector<ChangeMask> all = verifier->Changes(aligned, q.changed.points);
+      GeometricChangeOptions go;
+      go.rank_by_evidence = by_evidence;
+      std::vector<ChangeMask> all = verifier->Changes(aligned, q.changed, go);
       for (ChangeMask& mk : *masks) all.push_back(std::move(mk));
       *masks = std::move(all);
     } else if (verifier) {
@@ -541,7 +548,7 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       outcomes[k] = run.outcome;
       if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
         EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr,
-                       m.geometric_masks, &first[k], &masks[k], &false_alarms[k]);
+                       m.geometric_masks, m.masks_by_evidence, &first[k], &masks[k], &false_alarms[k]);
       }
       std::lock_guard<std::mutex> lock(mu);
       bar.Update(++done);

@@ -7,7 +7,6 @@
 #include "core/align/icp.h"
 #include "core/align/prepared_map.h"
 #include "core/align/scan_match.h"
-#include "core/change/geometric_changes.h"
 #include "core/eval/point_grid.h"
 
 namespace lmd::eval {
@@ -130,11 +129,11 @@ double Verifier::Unexplained(size_t db, const Pose2& pose, const std::vector<Poi
   return static_cast<double>(far) / static_cast<double>(points.size());
 }
 
-std::vector<ChangeMask> Verifier::Changes(const std::vector<std::pair<size_t, Pose2>>& aligned,
-                                          const std::vector<Point2>& points) const {
+std::vector<ChangeMask> Verifier::Changes(const std::vector<std::pair<size_t, Pose2>>& aligned, const LocalMap& query,
+                                          const GeometricChangeOptions& options) const {
   std::vector<AlignedMap> maps;
   for (const auto& [db, pose] : aligned) maps.push_back({&impl_->Map(db), pose, db});
-  return GeometricChanges(points, maps);
+  return GeometricChanges(query.points, query.trajectory, maps, options);
 }
 
 }  // namespace lmd::eval

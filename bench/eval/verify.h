@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/change/change_detector.h"
+#include "core/change/geometric_changes.h"
 #include "core/types.h"
 
 namespace lmd::eval {
@@ -62,11 +63,11 @@ class Verifier {
   // observed as free: evidence of a change (not merely an unobserved area).
   double Unexplained(size_t db, const Pose2& pose, const std::vector<Point2>& points, double radius_m) const;
 
-  // Geometric change masks (core/change/geometric_changes.h) of `points`
-  // (query own frame) against the db maps `aligned` (index, query pose in
+  // Geometric change masks (core/change/geometric_changes.h) of `query`'s
+  // points (own frame) against the db maps `aligned` (index, query pose in
   // it) of the query's place; a mask's db_map_id is a db map index.
-  std::vector<ChangeMask> Changes(const std::vector<std::pair<size_t, Pose2>>& aligned,
-                                  const std::vector<Point2>& points) const;
+  std::vector<ChangeMask> Changes(const std::vector<std::pair<size_t, Pose2>>& aligned, const LocalMap& query,
+                                  const GeometricChangeOptions& options) const;
 
   // Frees the prepared db maps.
   void Clear();

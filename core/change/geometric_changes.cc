@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <unordered_map>
 
@@ -55,9 +56,29 @@ std::vector<std::vector<size_t>> LinkedGroups(const std::vector<Point2>& points,
   return groups;
 }
 
+// True when every cell of `map`'s free grid within `margin` of p (a square) is free.
+bool DeepInFreeSpace(const PreparedMap& map, const Point2& p, double margin) {
+  const double step = map.occupancy.cell_m();
+  const int reach = static_cast<int>(std::lround(margin / step));
+  for (int dy = -reach; dy <= reach; ++dy) {
+    for (int dx = -reach; dx <= reach; ++dx) {
+      if (!InFreeSpace(map, {p.x + dx * step, p.y + dy * step})) return false;
+    }
+  }
+  return true;
+}
+
+double RangeOf(const Point2& p, const std::vector<Pose2>& trajectory) {
+  double best2 = std::numeric_limits<double>::infinity();
+  for (const Pose2& t : trajectory) best2 = std::min(best2, (t.x - p.x) * (t.x - p.x) + (t.y - p.y) * (t.y - p.y));
+  return std::sqrt(best2);
+}
+
 }  // namespace
 
-std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points, const std::vector<AlignedMap>& maps,
+std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points,
+                                         const std::vector<Pose2>& query_trajectory,
+                                         const std::vector<AlignedMap>& maps,
                                          const GeometricChangeOptions& options) {
   struct Placed {
     const AlignedMap* map;
@@ -71,27 +92,41 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
   // for change point i and placed map k.
   const size_t n = placed.size();
   std::vector<Point2> changed;
+  std::vector<double> evidence;  // per change point, its weight in the ranking
   std::vector<uint8_t> seen_free;
   std::vector<uint8_t> free(n);
+  std::vector<Point2> in_db(n);
   for (const Point2& p : query_points) {
     bool explained = false, any_free = false;
     for (size_t k = 0; k < n && !explained; ++k) {
       const Pose2& t = placed[k].map->pose;
-      const Point2 in_db{t.x + placed[k].c * p.x - placed[k].s * p.y, t.y + placed[k].s * p.x + placed[k].c * p.y};
-      explained = NearestPoint(*placed[k].map->db, in_db, options.explained_radius_m) >= 0;
-      free[k] = !explained && InFreeSpace(*placed[k].map->db, in_db);
+      in_db[k] = {t.x + placed[k].c * p.x - placed[k].s * p.y, t.y + placed[k].s * p.x + placed[k].c * p.y};
+      explained = NearestPoint(*placed[k].map->db, in_db[k], options.explained_radius_m) >= 0;
+      free[k] = !explained && InFreeSpace(*placed[k].map->db, in_db[k]);
       any_free = any_free || free[k];
     }
     if (explained || !any_free) continue;
     changed.push_back(p);
     seen_free.insert(seen_free.end(), free.begin(), free.end());
+    double weight = 1.0;
+    if (options.rank_by_evidence) {
+      bool deep = false;
+      for (size_t k = 0; k < n && !deep; ++k) deep = free[k] && DeepInFreeSpace(*placed[k].map->db, in_db[k], options.free_margin_m);
+      weight = deep ? 1.0 : options.edge_weight;
+      if (!query_trajectory.empty() && options.range_scale_m > 0) {
+        weight /= 1.0 + RangeOf(p, query_trajectory) / options.range_scale_m;
+      }
+    }
+    evidence.push_back(weight);
   }
   std::vector<ChangeMask> masks;
   for (const std::vector<size_t>& group : LinkedGroups(changed, options.merge_radius_m)) {
     if (group.size() < std::max<size_t>(1, options.min_points)) continue;
     ChangeMask mask;
     std::vector<size_t> free_votes(n, 0);
+    double score = 0;
     for (size_t i : group) {
+      score += evidence[i];
       mask.points.push_back(changed[i]);
       mask.scores.push_back(1.0);
       mask.centre.x += changed[i].x / group.size();
@@ -100,11 +135,11 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
     }
     const size_t credited = std::max_element(free_votes.begin(), free_votes.end()) - free_votes.begin();
     mask.db_map_id = placed[credited].map->id;
-    mask.score = static_cast<double>(group.size());
+    mask.score = score;
     masks.push_back(std::move(mask));
   }
   std::stable_sort(masks.begin(), masks.end(), [](const ChangeMask& a, const ChangeMask& b) {
-    return a.points.size() > b.points.size();
+    return a.score != b.score ? a.score > b.score : a.points.size() > b.points.size();
   });
   for (size_t r = 0; r < masks.size(); ++r) masks[r].rank = r;
   return masks;

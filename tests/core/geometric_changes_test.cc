@@ -1,5 +1,7 @@
 #include "core/change/geometric_changes.h"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -21,7 +23,7 @@ TEST(GeometricChangesTest, AnUnchangedMapHasNoMasks) {
   for (size_t i = 0; i < DemoMaps().size(); i += 37) {
     const LocalMap& map = DemoMaps()[i];
     const PreparedMap prepared = PrepareMap(map);
-    EXPECT_TRUE(GeometricChanges(map.points, {{&prepared, Pose2{}, 7}}).empty()) << map.id;
+    EXPECT_TRUE(GeometricChanges(map.points, map.trajectory, {{&prepared, Pose2{}, 7}}).empty()) << map.id;
   }
 }
 
@@ -37,7 +39,7 @@ TEST(GeometricChangesTest, TheTopMaskIsTheSimulatedChange) {
     if (!change.ok()) continue;
     ++tasks;
     const PreparedMap prepared = PrepareMap(map);
-    const std::vector<ChangeMask> masks = GeometricChanges(changed.points, {{&prepared, Pose2{}, 7}});
+    const std::vector<ChangeMask> masks = GeometricChanges(changed.points, changed.trajectory, {{&prepared, Pose2{}, 7}});
     if (masks.empty()) continue;
     EXPECT_EQ(masks[0].db_map_id, 7u);
     EXPECT_EQ(masks[0].rank, 0u);
@@ -57,18 +59,80 @@ TEST(GeometricChangesTest, AnObjectAnotherStoredMapShowsIsNoChange) {
   ASSERT_TRUE(ApplySimulatedChange(changed, rng).ok());
   const PreparedMap before = PrepareMap(map);
   const PreparedMap after = PrepareMap(changed);  // a stored map made after the change
-  const std::vector<ChangeMask> against_before = GeometricChanges(changed.points, {{&before, Pose2{}, 1}});
+  const std::vector<ChangeMask> against_before = GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}});
   ASSERT_FALSE(against_before.empty());
   EXPECT_EQ(against_before[0].db_map_id, 1u);
-  EXPECT_TRUE(GeometricChanges(changed.points, {{&before, Pose2{}, 1}, {&after, Pose2{}, 2}}).empty());
+  EXPECT_TRUE(GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}, {&after, Pose2{}, 2}}).empty());
   // Listed first but without free space, the bare copy never gets the credit.
   LocalMap bare;
   bare.points = map.points;
   const PreparedMap bare_prepared = PrepareMap(bare);
   const std::vector<ChangeMask> credited =
-      GeometricChanges(changed.points, {{&bare_prepared, Pose2{}, 3}, {&before, Pose2{}, 1}});
+      GeometricChanges(changed.points, changed.trajectory, {{&bare_prepared, Pose2{}, 3}, {&before, Pose2{}, 1}});
   ASSERT_EQ(credited.size(), against_before.size());
   for (const ChangeMask& mask : credited) EXPECT_EQ(mask.db_map_id, 1u);
+}
+
+// Cells of `db`'s free grid (centres, own frame) with a free margin or not, at
+// least 0.6 m from every db point, and a range from the trajectory in [lo, hi).
+std::vector<Point2> FreeCells(const LocalMap& map, const PreparedMap& db, bool deep, double lo, double hi) {
+  const OccupancyGrid& g = db.occupancy;
+  std::vector<Point2> out;
+  for (int y = 2; y + 2 < g.height(); ++y) {
+    for (int x = 2; x + 2 < g.width(); ++x) {
+      if (g.at(x, y) != CellState::kFree) continue;
+      bool margin = true;
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) margin = margin && g.at(x + dx, y + dy) == CellState::kFree;
+      if (margin != deep) continue;
+      const Point2 c = g.CellCentre(x, y);
+      double dist2 = 0;
+      if (NearestPoint(db, c, 0.6, &dist2) >= 0) continue;
+      double range = 1e9;
+      for (const Pose2& t : map.trajectory) range = std::min(range, std::hypot(t.x - c.x, t.y - c.y));
+      if (range >= lo && range < hi) out.push_back(c);
+    }
+  }
+  return out;
+}
+
+// Two new objects: a small one in open space next to the robot and a larger
+// one far away (or at the edge of the space the stored map saw free). The
+// near, well-observed one ranks first; by point count alone it would not.
+TEST(GeometricChangesTest, WellObservedChangesOutrankLargerOnesFarAwayOrAtTheEdgeOfFreeSpace) {
+  for (const bool edge : {false, true}) {
+    SCOPED_TRACE(edge ? "edge of free space" : "far away");
+    int tried = 0;
+    for (size_t i = 0; i < DemoMaps().size() && tried < 3; i += 17) {
+      const LocalMap& map = DemoMaps()[i];
+      const PreparedMap db = PrepareMap(map);
+      const std::vector<Point2> near = FreeCells(map, db, true, 0.5, 2.0);
+      const std::vector<Point2> other = edge ? FreeCells(map, db, false, 0.5, 2.0) : FreeCells(map, db, true, 8.0, 1e9);
+      // An object of `n` points around cell centre c (all in that cell).
+      auto object = [](const Point2& c, int n, LocalMap* query) {
+        for (int k = 0; k < n; ++k) query->points.push_back({c.x + 0.01 * (k % 3 - 1), c.y + 0.01 * (k / 3 - 1)});
+      };
+      const Point2* a = near.empty() ? nullptr : &near.front();
+      const Point2* b = nullptr;
+      for (const Point2& c : other) {
+        if (a && std::hypot(c.x - a->x, c.y - a->y) > 2.0) { b = &c; break; }
+      }
+      if (!a || !b) continue;
+      ++tried;
+      LocalMap query = map;
+      object(*a, 5, &query);
+      object(*b, 8, &query);
+      const std::vector<ChangeMask> ranked = GeometricChanges(query.points, query.trajectory, {{&db, Pose2{}, 1}});
+      ASSERT_EQ(ranked.size(), 2u) << map.id;
+      EXPECT_EQ(ranked[0].points.size(), 5u) << map.id;
+      GeometricChangeOptions by_count;
+      by_count.rank_by_evidence = false;
+      const std::vector<ChangeMask> counted = GeometricChanges(query.points, query.trajectory, {{&db, Pose2{}, 1}}, by_count);
+      ASSERT_EQ(counted.size(), 2u) << map.id;
+      EXPECT_EQ(counted[0].points.size(), 8u) << map.id;
+    }
+    EXPECT_EQ(tried, 3);
+  }
 }
 
 TEST(GeometricChangesTest, PointsTheDbMapNeverObservedAreNotChanges) {
@@ -77,15 +141,15 @@ TEST(GeometricChangesTest, PointsTheDbMapNeverObservedAreNotChanges) {
   // Far outside everything the db map's beams crossed.
   std::vector<Point2> far;
   for (int k = 0; k < 50; ++k) far.push_back({500.0 + 0.05 * k, 500.0});
-  EXPECT_TRUE(GeometricChanges(far, {{&prepared, Pose2{}, 1}}).empty());
+  EXPECT_TRUE(GeometricChanges(far, {}, {{&prepared, Pose2{}, 1}}).empty());
   // A db map without scans or trajectory has no free space: no masks.
   LocalMap bare;
   bare.points = map.points;
   LocalMap shifted = map;
   for (Point2& p : shifted.points) p.x += 1.0;
   const PreparedMap bare_prepared = PrepareMap(bare);
-  EXPECT_TRUE(GeometricChanges(shifted.points, {{&bare_prepared, Pose2{}, 1}}).empty());
-  EXPECT_TRUE(GeometricChanges(shifted.points, {}).empty());
+  EXPECT_TRUE(GeometricChanges(shifted.points, shifted.trajectory, {{&bare_prepared, Pose2{}, 1}}).empty());
+  EXPECT_TRUE(GeometricChanges(shifted.points, shifted.trajectory, {}).empty());
 }
 
 }  // namespace
