@@ -105,6 +105,20 @@ ChangeResult AverageChange(const std::vector<DatasetResults>& ds) {
   return o;
 }
 
+// "s@1 / s@10" of `key`'s change detection averaged over datasets, or "-"
+// for a method without change evaluation.
+std::string MethodChangeCell(const std::vector<DatasetResults>& ds, const std::string& key) {
+  double at1 = 0, at10 = 0;
+  size_t n = 0;
+  for (const DatasetResults& d : ds) {
+    const auto it = d.method_change.find(key);
+    if (it == d.method_change.end() || it->second.tasks == 0) continue;
+    at1 += it->second.success_at_1, at10 += it->second.success_at_10, ++n;
+  }
+  if (n == 0) return "-";
+  return Fmt("%.2f", at1 / n) + " / " + Fmt("%.2f", at10 / n);
+}
+
 std::string ResultsJson(const std::vector<MethodSpec>& specs, const std::vector<DatasetResults>& ds,
                         const RunInfo& info) {
   std::string j = "{\n\"run\": {\"command\": \"" + info.command + "\", \"date\": \"" + info.date +
@@ -270,15 +284,16 @@ std::string ReportMd(const std::vector<MethodSpec>& specs, const std::vector<Dat
   }
   if (!abl.empty()) {
     r += "\n## Ablations of best (each row changes one option of best)\n\n";
-    r += "| row | change | ANR % | top-1 % | top-10 % | place@1 | place@5 | pose m | pose deg | ms/query |\n"
-         "|---|---|---|---|---|---|---|---|---|---|\n";
+    r += "| row | change | ANR % | top-1 % | top-10 % | place@1 | place@5 | pose m | pose deg | ms/query | "
+         "change success@1 / @10 |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const MethodSpec& m : specs) {
       if (m.group != "best" && m.group != "ablation") continue;
       const RetrievalSummary s = AverageOverDatasets(Column(ds, m.key));
       r += "| " + m.key + " | " + (m.group == "best" ? std::string("(all options)") : m.note) + " | " + Pct(s.anr) +
            " | " + Rate(s.top1) + " | " + Rate(s.top10) + " | " + Rate(s.place_at_1) + " | " + Rate(s.place_at_5) +
            " | " + Fmt("%.3f", s.pose_err_m_median) + " | " + Fmt("%.2f", s.pose_err_deg_median) + " | " +
-           Fmt("%.1f", s.ms_per_query) + " |\n";
+           Fmt("%.1f", s.ms_per_query) + " | " + MethodChangeCell(ds, m.key) + " |\n";
     }
     r += "\nplace@1 per dataset:\n\n";
     std::vector<std::string> keys = {"best"};

@@ -82,8 +82,9 @@ struct DatasetResults {
   size_t maps = 0;
   size_t queries = 0;
   std::map<std::string, RetrievalSummary> methods;
-  ChangeResult change;
-  std::string change_method;
+  ChangeResult change;            // change_method's
+  std::string change_method;      // the first method with change_eval
+  std::map<std::string, ChangeResult> method_change;  // every method with change_eval
 };
 
 struct RunInfo {

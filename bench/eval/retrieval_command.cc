@@ -555,9 +555,8 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
     });
     bar.Done();
     res.methods[m.key] = Summarize(outcomes);
-    if (m.change_eval && res.change_method.empty()) {
-      res.change_method = m.key;
-      ChangeResult& c = res.change;
+    if (m.change_eval) {
+      ChangeResult& c = res.method_change[m.key];
       c.ks = LogSteps(1000);
       const std::vector<double>& ts = ChangeThresholds();
       std::vector<std::vector<size_t>> per_t(ts.size());
@@ -577,6 +576,7 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       }
       c.false_alarm_rate = total_masks ? static_cast<double>(total_false) / total_masks : 0.0;
       c.masks_mean = c.tasks ? static_cast<double>(total_masks) / c.tasks : 0.0;
+      if (res.change_method.empty()) res.change_method = m.key, res.change = c;
     }
   }
   return res;
