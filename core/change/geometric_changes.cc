@@ -68,10 +68,14 @@ bool DeepInFreeSpace(const PreparedMap& map, const Point2& p, double margin) {
   return true;
 }
 
+// Distance from p to the nearest finite pose of `trajectory`; 0 if it has none.
 double RangeOf(const Point2& p, const std::vector<Pose2>& trajectory) {
   double best2 = std::numeric_limits<double>::infinity();
-  for (const Pose2& t : trajectory) best2 = std::min(best2, (t.x - p.x) * (t.x - p.x) + (t.y - p.y) * (t.y - p.y));
-  return std::sqrt(best2);
+  for (const Pose2& t : trajectory) {
+    const double d2 = (t.x - p.x) * (t.x - p.x) + (t.y - p.y) * (t.y - p.y);
+    if (d2 < best2) best2 = d2;  // false for NaN
+  }
+  return std::isfinite(best2) ? std::sqrt(best2) : 0.0;
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -132,6 +133,24 @@ TEST(GeometricChangesTest, WellObservedChangesOutrankLargerOnesFarAwayOrAtTheEdg
       EXPECT_EQ(counted[0].points.size(), 8u) << map.id;
     }
     EXPECT_EQ(tried, 3);
+  }
+}
+
+// Poses that are not finite give no range (as no trajectory), never NaN scores.
+TEST(GeometricChangesTest, ANonFiniteTrajectoryRanksAsNoTrajectory) {
+  std::mt19937_64 rng(3);
+  const LocalMap& map = DemoMaps()[40];
+  LocalMap changed = map;
+  ASSERT_TRUE(ApplySimulatedChange(changed, rng).ok());
+  const PreparedMap db = PrepareMap(map);
+  const std::vector<ChangeMask> plain = GeometricChanges(changed.points, {}, {{&db, Pose2{}, 1}});
+  ASSERT_FALSE(plain.empty());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<ChangeMask> odd = GeometricChanges(changed.points, {Pose2{nan, 0, 0}, Pose2{0, nan, 0}}, {{&db, Pose2{}, 1}});
+  ASSERT_EQ(odd.size(), plain.size());
+  for (size_t r = 0; r < odd.size(); ++r) {
+    EXPECT_EQ(odd[r].score, plain[r].score) << r;
+    EXPECT_EQ(odd[r].points.size(), plain[r].points.size()) << r;
   }
 }
 
