@@ -124,8 +124,8 @@ int ChangesCommand(const CommandContext& ctx) {
         y += mask.y(i) / mask.y_size();
       }
       if (mask.source() == v1::MASK_SOURCE_GEOMETRIC) {
-        std::printf("       change %-3u at (%.2f, %.2f) m, %d points the stored map saw as free\n", mask.rank(), x, y,
-                    mask.x_size());
+        std::printf("       change %-3u at (%.2f, %.2f) m, %d points the stored map saw as free, evidence %.1f\n",
+                    mask.rank(), x, y, mask.x_size(), mask.score());
       } else {
         std::printf("       change %-3u at (%.2f, %.2f) m, %d features, r=%.2f\n", mask.rank(), x, y,
                     mask.x_size(), mask.score());
