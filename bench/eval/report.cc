@@ -105,18 +105,26 @@ ChangeResult AverageChange(const std::vector<DatasetResults>& ds) {
   return o;
 }
 
-// "s@1 / s@10" of `key`'s change detection averaged over datasets, or "-"
-// for a method without change evaluation.
-std::string MethodChangeCell(const std::vector<DatasetResults>& ds, const std::string& key) {
-  double at1 = 0, at10 = 0;
+// `key`'s change detection at the default threshold (success@1, @10, false
+// alarms) averaged over datasets; tasks summed. No tasks: not evaluated.
+ChangeResult AverageMethodChange(const std::vector<DatasetResults>& ds, const std::string& key) {
+  ChangeResult o;
   size_t n = 0;
   for (const DatasetResults& d : ds) {
     const auto it = d.method_change.find(key);
     if (it == d.method_change.end() || it->second.tasks == 0) continue;
-    at1 += it->second.success_at_1, at10 += it->second.success_at_10, ++n;
+    const ChangeResult& c = it->second;
+    o.tasks += c.tasks, ++n;
+    o.success_at_1 += c.success_at_1, o.success_at_10 += c.success_at_10, o.false_alarm_rate += c.false_alarm_rate;
   }
-  if (n == 0) return "-";
-  return Fmt("%.2f", at1 / n) + " / " + Fmt("%.2f", at10 / n);
+  if (n > 0) o.success_at_1 /= n, o.success_at_10 /= n, o.false_alarm_rate /= n;
+  return o;
+}
+
+// "s@1 / s@10" of `key`'s change detection, or "-" for a method without it.
+std::string MethodChangeCell(const std::vector<DatasetResults>& ds, const std::string& key) {
+  const ChangeResult c = AverageMethodChange(ds, key);
+  return c.tasks == 0 ? "-" : Fmt("%.2f", c.success_at_1) + " / " + Fmt("%.2f", c.success_at_10);
 }
 
 std::string ResultsJson(const std::vector<MethodSpec>& specs, const std::vector<DatasetResults>& ds,
@@ -159,7 +167,18 @@ std::string ResultsJson(const std::vector<MethodSpec>& specs, const std::vector<
     j += std::string(first ? "\n  " : ",\n  ") + "\"" + d.name + "\": " + ChangeJson(d.change);
     first = false;
   }
-  j += "},\n  \"overall\": " + ChangeJson(AverageChange(ds)) + "},\n";
+  j += "},\n  \"overall\": " + ChangeJson(AverageChange(ds)) + ",\n  \"by_method\": {";
+  // Every method with change evaluation (best and change ablations), averaged over datasets.
+  first = true;
+  for (const MethodSpec& m : specs) {
+    const ChangeResult c = AverageMethodChange(ds, m.key);
+    if (c.tasks == 0) continue;
+    j += std::string(first ? "\n    " : ",\n    ") + "\"" + m.key + "\": {\"tasks\": " + std::to_string(c.tasks) +
+         ", \"success_at_1\": " + JsonNumber(c.success_at_1) + ", \"success_at_10\": " + JsonNumber(c.success_at_10) +
+         ", \"false_alarm_rate\": " + JsonNumber(c.false_alarm_rate) + "}";
+    first = false;
+  }
+  j += "}},\n";
   j += section("ablation", true) + "\n}\n";
   return j;
 }

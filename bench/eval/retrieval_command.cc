@@ -576,7 +576,10 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       }
       c.false_alarm_rate = total_masks ? static_cast<double>(total_false) / total_masks : 0.0;
       c.masks_mean = c.tasks ? static_cast<double>(total_masks) / c.tasks : 0.0;
-      if (res.change_method.empty()) res.change_method = m.key, res.change = c;
+      if (res.change_method.empty()) {
+        res.change_method = m.key;
+        res.change = c;
+      }
     }
   }
   return res;

@@ -58,7 +58,7 @@ struct ChangeMask {
   std::vector<Point2> points;   // change features, query map's own frame, m
   std::vector<double> scores;   // r of each point
   Point2 centre;                // mean of points, own frame
-  double score = 0.0;           // max r
+  double score = 0.0;           // max r (geometric masks: evidence, geometric_changes.h)
   size_t rank = 0;              // 0 = first
 };
 

@@ -56,10 +56,12 @@ std::vector<std::vector<size_t>> LinkedGroups(const std::vector<Point2>& points,
   return groups;
 }
 
-// True when every cell of `map`'s free grid within `margin` of p (a square) is free.
+// True when every cell of `map`'s free grid within `margin` of p (a square of
+// cells, at most 10 cells each way) is free.
 bool DeepInFreeSpace(const PreparedMap& map, const Point2& p, double margin) {
   const double step = map.occupancy.cell_m();
-  const int reach = static_cast<int>(std::lround(margin / step));
+  const double cells = margin / step;
+  const int reach = cells > 0 ? static_cast<int>(std::lround(std::min(cells, 10.0))) : 0;  // NaN: 0
   for (int dy = -reach; dy <= reach; ++dy) {
     for (int dx = -reach; dx <= reach; ++dx) {
       if (!InFreeSpace(map, {p.x + dx * step, p.y + dy * step})) return false;
@@ -115,7 +117,9 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
     double weight = 1.0;
     if (options.rank_by_evidence) {
       bool deep = false;
-      for (size_t k = 0; k < n && !deep; ++k) deep = free[k] && DeepInFreeSpace(*placed[k].map->db, in_db[k], options.free_margin_m);
+      for (size_t k = 0; k < n && !deep; ++k) {
+        deep = free[k] && DeepInFreeSpace(*placed[k].map->db, in_db[k], options.free_margin_m);
+      }
       weight = deep ? 1.0 : options.edge_weight;
       if (!query_trajectory.empty() && options.range_scale_m > 0) {
         weight /= 1.0 + RangeOf(p, query_trajectory) / options.range_scale_m;

@@ -10,8 +10,9 @@
 // min_points points are dropped as noise.
 //
 // Masks are ranked by evidence, the sum over their points of
-//   (1 if the map(s) that saw the point free also saw free everything within
-//    free_margin_m of it, else edge_weight) / (1 + range / range_scale_m),
+//   (1 if a map that saw the point free also saw free every cell of its grid
+//    within free_margin_m of it (a square), else edge_weight)
+//   / (1 + range / range_scale_m),
 // range = distance to the nearest pose of the query's trajectory. A point at
 // the edge of observed free space (beside a wall, or where the db map's
 // beams ended) is what a small misalignment or a grazing beam makes; a

@@ -40,7 +40,8 @@ TEST(GeometricChangesTest, TheTopMaskIsTheSimulatedChange) {
     if (!change.ok()) continue;
     ++tasks;
     const PreparedMap prepared = PrepareMap(map);
-    const std::vector<ChangeMask> masks = GeometricChanges(changed.points, changed.trajectory, {{&prepared, Pose2{}, 7}});
+    const std::vector<ChangeMask> masks =
+        GeometricChanges(changed.points, changed.trajectory, {{&prepared, Pose2{}, 7}});
     if (masks.empty()) continue;
     EXPECT_EQ(masks[0].db_map_id, 7u);
     EXPECT_EQ(masks[0].rank, 0u);
@@ -60,10 +61,12 @@ TEST(GeometricChangesTest, AnObjectAnotherStoredMapShowsIsNoChange) {
   ASSERT_TRUE(ApplySimulatedChange(changed, rng).ok());
   const PreparedMap before = PrepareMap(map);
   const PreparedMap after = PrepareMap(changed);  // a stored map made after the change
-  const std::vector<ChangeMask> against_before = GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}});
+  const std::vector<ChangeMask> against_before =
+      GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}});
   ASSERT_FALSE(against_before.empty());
   EXPECT_EQ(against_before[0].db_map_id, 1u);
-  EXPECT_TRUE(GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}, {&after, Pose2{}, 2}}).empty());
+  EXPECT_TRUE(
+      GeometricChanges(changed.points, changed.trajectory, {{&before, Pose2{}, 1}, {&after, Pose2{}, 2}}).empty());
   // Listed first but without free space, the bare copy never gets the credit.
   LocalMap bare;
   bare.points = map.points;
@@ -74,17 +77,20 @@ TEST(GeometricChangesTest, AnObjectAnotherStoredMapShowsIsNoChange) {
   for (const ChangeMask& mask : credited) EXPECT_EQ(mask.db_map_id, 1u);
 }
 
-// Cells of `db`'s free grid (centres, own frame) with a free margin or not, at
-// least 0.6 m from every db point, and a range from the trajectory in [lo, hi).
+// Cells of `db`'s free grid (centres, own frame) whose free margin (the
+// default free_margin_m) is whole or not, at least 0.6 m from every db point,
+// with a range from the trajectory in [lo, hi).
 std::vector<Point2> FreeCells(const LocalMap& map, const PreparedMap& db, bool deep, double lo, double hi) {
   const OccupancyGrid& g = db.occupancy;
+  const int reach = static_cast<int>(std::lround(GeometricChangeOptions().free_margin_m / g.cell_m()));
   std::vector<Point2> out;
-  for (int y = 2; y + 2 < g.height(); ++y) {
-    for (int x = 2; x + 2 < g.width(); ++x) {
+  for (int y = reach; y + reach < g.height(); ++y) {
+    for (int x = reach; x + reach < g.width(); ++x) {
       if (g.at(x, y) != CellState::kFree) continue;
       bool margin = true;
-      for (int dy = -2; dy <= 2; ++dy)
-        for (int dx = -2; dx <= 2; ++dx) margin = margin && g.at(x + dx, y + dy) == CellState::kFree;
+      for (int dy = -reach; dy <= reach; ++dy) {
+        for (int dx = -reach; dx <= reach; ++dx) margin = margin && g.at(x + dx, y + dy) == CellState::kFree;
+      }
       if (margin != deep) continue;
       const Point2 c = g.CellCentre(x, y);
       double dist2 = 0;
@@ -128,7 +134,8 @@ TEST(GeometricChangesTest, WellObservedChangesOutrankLargerOnesFarAwayOrAtTheEdg
       EXPECT_EQ(ranked[0].points.size(), 5u) << map.id;
       GeometricChangeOptions by_count;
       by_count.rank_by_evidence = false;
-      const std::vector<ChangeMask> counted = GeometricChanges(query.points, query.trajectory, {{&db, Pose2{}, 1}}, by_count);
+      const std::vector<ChangeMask> counted =
+          GeometricChanges(query.points, query.trajectory, {{&db, Pose2{}, 1}}, by_count);
       ASSERT_EQ(counted.size(), 2u) << map.id;
       EXPECT_EQ(counted[0].points.size(), 8u) << map.id;
     }
@@ -146,7 +153,8 @@ TEST(GeometricChangesTest, ANonFiniteTrajectoryRanksAsNoTrajectory) {
   const std::vector<ChangeMask> plain = GeometricChanges(changed.points, {}, {{&db, Pose2{}, 1}});
   ASSERT_FALSE(plain.empty());
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const std::vector<ChangeMask> odd = GeometricChanges(changed.points, {Pose2{nan, 0, 0}, Pose2{0, nan, 0}}, {{&db, Pose2{}, 1}});
+  const std::vector<ChangeMask> odd =
+      GeometricChanges(changed.points, {Pose2{nan, 0, 0}, Pose2{0, nan, 0}}, {{&db, Pose2{}, 1}});
   ASSERT_EQ(odd.size(), plain.size());
   for (size_t r = 0; r < odd.size(); ++r) {
     EXPECT_EQ(odd[r].score, plain[r].score) << r;
