@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/change/geometric_changes.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/index/retrieve_options.h"
 #include "core/viewpoint/viewpoint.h"
@@ -56,6 +57,7 @@ struct MethodSpec {
   bool geometric_masks = false;
   // Geometric masks ranked by evidence (free-space margin, range); false: by point count.
   bool masks_by_evidence = true;
+  double mask_explained_radius_m = GeometricChangeOptions().explained_radius_m;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

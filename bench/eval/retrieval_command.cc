@@ -146,6 +146,10 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.masks_by_evidence = false;
   a.change_eval = true;
   v.push_back(a);
+  a = ablation("abl_explained_0.3", "geometric change masks: a query point within 0.3 m (not 0.2) of a stored point is explained");
+  a.mask_explained_radius_m = 0.3;
+  a.change_eval = true;
+  v.push_back(a);
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
   a.verify_top_n = 20;
   v.push_back(a);
@@ -430,8 +434,7 @@ MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t
 
 // First 1-based mask rank at which the task succeeds (0 = never), per threshold.
 void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
-                    Planner planner, const Verifier* verifier, bool geometric, bool by_evidence,
-                    std::vector<size_t>* first,
+                    Planner planner, const Verifier* verifier, const MethodSpec& m, std::vector<size_t>* first,
                     size_t* masks_default, size_t* false_default) {
   const EvalQuery& q = d.queries[qi];
   std::vector<ChangeCandidate> cands;
@@ -454,14 +457,15 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     o.threshold = std::max(ts[t], 1e-9);  // T = 0: every feature with r > 0 (the detector needs T > 0)
     Result<std::vector<ChangeMask>> masks = DetectChanges(s.q[qi], cands, o);
     if (!masks.ok()) continue;
-    if (verifier && geometric) {
+    if (verifier && m.geometric_masks) {
       // Geometric masks against the matched hits, before the descriptor's masks.
       std::vector<std::pair<size_t, Pose2>> aligned;
       for (const Scored& h : run.top) {
         if (h.matched) aligned.push_back({h.db, h.pose});
       }
       GeometricChangeOptions go;
-      go.rank_by_evidence = by_evidence;
+      go.rank_by_evidence = m.masks_by_evidence;
+      go.explained_radius_m = m.mask_explained_radius_m;
       std::vector<ChangeMask> all = verifier->Changes(aligned, q.changed, go);
       for (ChangeMask& mk : *masks) all.push_back(std::move(mk));
       *masks = std::move(all);
@@ -548,7 +552,7 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       outcomes[k] = run.outcome;
       if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
         EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr,
-                       m.geometric_masks, m.masks_by_evidence, &first[k], &masks[k], &false_alarms[k]);
+                       m, &first[k], &masks[k], &false_alarms[k]);
       }
       std::lock_guard<std::mutex> lock(mu);
       bar.Update(++done);
