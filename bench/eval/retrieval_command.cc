@@ -146,7 +146,8 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.masks_by_evidence = false;
   a.change_eval = true;
   v.push_back(a);
-  a = ablation("abl_explained_0.3", "geometric change masks: a query point within 0.3 m (not 0.2) of a stored point is explained");
+  a = ablation("abl_explained_0.3",
+               "geometric change masks: a query point within 0.3 m (not 0.2) of a stored point is explained");
   a.mask_explained_radius_m = 0.3;
   a.change_eval = true;
   v.push_back(a);
