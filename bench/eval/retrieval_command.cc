@@ -435,7 +435,7 @@ MapHit HitFromPose(const Frame& qf, const Frame& df, const Pose2& pose, uint64_t
 
 // First 1-based mask rank at which the task succeeds (0 = never), per threshold.
 void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const DescSet& s, const Plans& plans,
-                    Planner planner, const Verifier* verifier, const MethodSpec& m, std::vector<size_t>* first,
+                    const Verifier* verifier, const MethodSpec& m, std::vector<size_t>* first,
                     size_t* masks_default, size_t* false_default) {
   const EvalQuery& q = d.queries[qi];
   std::vector<ChangeCandidate> cands;
@@ -443,7 +443,7 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     const Scored& h = run.top[r];
     ChangeCandidate c;
     if (h.verified) {
-      c.hit = HitFromPose(plans.Q(planner, qi), plans.Db(planner, h.db), h.pose, h.db, h.final_score, r);
+      c.hit = HitFromPose(plans.Q(m.planner, qi), plans.Db(m.planner, h.db), h.pose, h.db, h.final_score, r);
     } else {
       c.hit.map_id = h.db, c.hit.score = h.final_score, c.hit.rank = r, c.hit.orientation = h.orientation;
       c.hit.offset = h.offset;
@@ -552,8 +552,8 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
       const QueryRun run = RunQuery(d, qi, m, plans, main, other, verifier);
       outcomes[k] = run.outcome;
       if (m.change_eval && d.queries[qi].change_ok && !m.stationary) {
-        EvalChangeTask(d, qi, run, main, plans, m.planner, m.change_geometric ? verifier : nullptr,
-                       m, &first[k], &masks[k], &false_alarms[k]);
+        EvalChangeTask(d, qi, run, main, plans, m.change_geometric ? verifier : nullptr, m, &first[k], &masks[k],
+                       &false_alarms[k]);
       }
       std::lock_guard<std::mutex> lock(mu);
       bar.Update(++done);
