@@ -1,42 +1,78 @@
 #include "server/hit_verifier.h"
 
-#include <optional>
+#include <cstring>
 
 #include "core/align/relative_pose.h"
 #include "proto/convert.h"
 
 namespace lmd::server {
+namespace {
+
+// Cache key of a map prepared as a query: its content and planned heading.
+std::string ContentKey(const DescriptorCache::Key& key, double heading) {
+  uint64_t heading_bits = 0;
+  static_assert(sizeof heading_bits == sizeof heading);
+  std::memcpy(&heading_bits, &heading, sizeof heading);
+  return "content/" + std::to_string(key.a) + "/" + std::to_string(key.b) + "/" + std::to_string(key.size) + "/" +
+         std::to_string(heading_bits);
+}
+
+}  // namespace
+
+std::shared_ptr<const PreparedMap> HitVerifier::Find(const std::string& key) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = index_.find(key);
+  if (it == index_.end()) return nullptr;
+  entries_.splice(entries_.begin(), entries_, it->second);
+  return it->second->second;
+}
+
+std::shared_ptr<const PreparedMap> HitVerifier::Take(const std::string& key) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = index_.find(key);
+  if (it == index_.end()) return nullptr;
+  std::shared_ptr<const PreparedMap> prepared = std::move(it->second->second);
+  cached_bytes_ -= prepared->MemoryBytes();
+  entries_.erase(it->second);
+  index_.erase(it);
+  return prepared;
+}
+
+void HitVerifier::Put(const std::string& key, std::shared_ptr<const PreparedMap> prepared) {
+  const size_t bytes = prepared->MemoryBytes();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (capacity_bytes_ == 0 || bytes > capacity_bytes_ || index_.count(key) != 0) return;
+  entries_.emplace_front(key, std::move(prepared));
+  index_[key] = entries_.begin();
+  cached_bytes_ += bytes;
+  while (cached_bytes_ > capacity_bytes_) {
+    cached_bytes_ -= entries_.back().second->MemoryBytes();
+    index_.erase(entries_.back().first);
+    entries_.pop_back();
+  }
+}
+
+std::shared_ptr<const PreparedMap> HitVerifier::Prepare(const LocalMap& map, double heading) {
+  ++maps_prepared_;
+  return std::make_shared<const PreparedMap>(PrepareMap(map, PreparedMapOptions(), heading));
+}
 
 Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::string& collection,
                                                                  const StoreHit& hit, double heading) {
   const std::string key = collection + "/" + std::to_string(hit.hit.map_id);
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (const auto it = index_.find(key); it != index_.end()) {
-      entries_.splice(entries_.begin(), entries_, it->second);
-      return it->second->second;
-    }
-  }
+  if (std::shared_ptr<const PreparedMap> cached = Find(key)) return cached;
   Result<v1::StoredMap> stored = store_->GetMap(collection, hit.map_id);
   if (!stored.ok()) return stored.status();
-  auto prepared = std::make_shared<const PreparedMap>(PrepareMap(FromProto(stored->map()), PreparedMapOptions(), heading));
-  const size_t bytes = prepared->MemoryBytes();
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (capacity_bytes_ > 0 && bytes <= capacity_bytes_ && index_.count(key) == 0) {
-    entries_.emplace_front(key, prepared);
-    index_[key] = entries_.begin();
-    cached_bytes_ += bytes;
-    while (cached_bytes_ > capacity_bytes_) {
-      cached_bytes_ -= entries_.back().second->MemoryBytes();
-      index_.erase(entries_.back().first);
-      entries_.pop_back();
-    }
-  }
-  return std::shared_ptr<const PreparedMap>(prepared);
+  std::shared_ptr<const PreparedMap> prepared =
+      Take(ContentKey(DescriptorCache::KeyOf(stored->map().SerializeAsString()), heading));
+  if (!prepared) prepared = Prepare(FromProto(stored->map()), heading);
+  Put(key, prepared);
+  return prepared;
 }
 
 Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& collection, const LocalMap& query,
-                                                          const Lmd& query_lmd, const std::vector<StoreHit>& hits,
+                                                          const DescriptorCache::Key& query_key, const Lmd& query_lmd,
+                                                          const std::vector<StoreHit>& hits,
                                                           size_t candidates, size_t enough_matches,
                                                           double reverse_conflict_weight) {
   candidates = std::min(candidates, hits.size());
@@ -69,12 +105,20 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
   options.enough_matches = enough_matches;
   options.reverse_conflict_weight = reverse_conflict_weight;
   const PreparedQuery prepared_query = PrepareQuery(query, options.match, query_lmd.frame.heading);
-  // The query's own free space, for reverse conflicts (about one db map's preparation).
-  std::optional<PreparedMap> query_map;
+  // The query's own free space, for reverse conflicts (one db map's preparation).
+  std::shared_ptr<const PreparedMap> query_map;
   if (reverse_conflict_weight > 0 && !inputs.empty()) {
-    query_map = PrepareMap(query, PreparedMapOptions(), query_lmd.frame.heading);
+    // The heading rounded as the store keeps it (lmd_codec: float), so that
+    // this preparation equals the one of the same map once stored.
+    const double heading = static_cast<float>(query_lmd.frame.heading);
+    const std::string key = ContentKey(query_key, heading);
+    query_map = Find(key);
+    if (!query_map) {
+      query_map = Prepare(query, heading);
+      Put(key, query_map);
+    }
   }
-  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options, query_map ? &*query_map : nullptr)) {
+  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options, query_map.get())) {
     VerifiedStoreHit hit;
     hit.hit = hits[verified.map_id];
     hit.verified = verified.verified && verified.score > 0;

@@ -38,7 +38,10 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       verifier_(store, size_t{config.prepared_map_cache_mb} << 20) {}
 
 Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
-  const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
+  return Describe(map, DescriptorCache::KeyOf(map.SerializeAsString()));
+}
+
+Lmd LmdServiceImpl::Describe(const v1::LocalMap& map, const DescriptorCache::Key& key) const {
   if (std::optional<Lmd> cached = cache_.Find(key)) return std::move(*cached);
   Lmd lmd = DescribeForIndex(FromProto(map), store_->indexing());
   cache_.Put(key, lmd);

@@ -53,8 +53,10 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
 
  private:
   // The descriptor of `map` as the store describes maps, from the cache when
-  // the same map was described recently.
+  // the same map was described recently; `key` is the map's content key
+  // (DescriptorCache::KeyOf of its wire bytes) if the caller has it.
   Lmd Describe(const v1::LocalMap& map) const;
+  Lmd Describe(const v1::LocalMap& map, const DescriptorCache::Key& key) const;
 
   // A query: validated, described, and retrieved against its collection.
   struct Query {

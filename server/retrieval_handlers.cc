@@ -72,7 +72,8 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
 
   Query query;
   query.map = FromProto(map);
-  query.lmd = Describe(map);
+  const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
+  query.lmd = Describe(map, key);
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
   const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
@@ -95,7 +96,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   }
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
-        verifier_.Verify(collection, query.map, query.lmd, *hits, config_.verify_candidates,
+        verifier_.Verify(collection, query.map, key, query.lmd, *hits, config_.verify_candidates,
                          config_.verify_enough_matches, config_.reverse_conflict_weight);
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();

@@ -1,5 +1,6 @@
 // HitVerifier's cache of prepared db maps: a hit's prepared map is reused
-// while it fits the byte budget and rebuilt once it was evicted.
+// while it fits the byte budget and rebuilt once it was evicted; a query's
+// prepared map is reused when a stored map has the same content.
 #include "server/hit_verifier.h"
 
 #include <map>
@@ -23,6 +24,7 @@ class HitVerifierTest : public ::testing::Test {
     store_ = std::move(store).value();
     indexing_ = options.indexing;
     query_ = FromProto(testing::SquareRoomMap(200));
+    query_key_ = DescriptorCache::KeyOf(testing::SquareRoomMap(200).SerializeAsString());
     query_lmd_ = DescribeForIndex(query_, indexing_);
     std::vector<MapWrite> writes;
     for (const char* id : {"a", "b"}) {  // two stored copies of the query's room
@@ -45,8 +47,10 @@ class HitVerifierTest : public ::testing::Test {
   void TearDown() override { ASSERT_TRUE(store_->Close().ok()); }
 
   // The prepared map each verified hit was matched against, by map id.
-  std::map<std::string, std::shared_ptr<const PreparedMap>> Verify(HitVerifier* verifier) {
-    Result<std::vector<VerifiedStoreHit>> verified = verifier->Verify("c", query_, query_lmd_, hits_, 2, 0, 0.0);
+  std::map<std::string, std::shared_ptr<const PreparedMap>> Verify(HitVerifier* verifier,
+                                                                   double reverse_conflict_weight = 0.0) {
+    Result<std::vector<VerifiedStoreHit>> verified =
+        verifier->Verify("c", query_, query_key_, query_lmd_, hits_, 2, 0, reverse_conflict_weight);
     EXPECT_TRUE(verified.ok());
     std::map<std::string, std::shared_ptr<const PreparedMap>> out;
     for (const VerifiedStoreHit& hit : *verified) {
@@ -60,6 +64,7 @@ class HitVerifierTest : public ::testing::Test {
   std::unique_ptr<MapStore> store_;
   IndexingConfig indexing_;
   LocalMap query_;
+  DescriptorCache::Key query_key_;
   Lmd query_lmd_;
   std::vector<StoreHit> hits_;
 };
@@ -83,6 +88,20 @@ TEST_F(HitVerifierTest, CacheKeepsPreparedMapsWithinItsByteBudget) {
   second = Verify(&tight);
   EXPECT_NE(first["a"], second["a"]);
   EXPECT_NE(first["b"], second["b"]);
+}
+
+TEST_F(HitVerifierTest, AQueryPreparedForReverseConflictsIsReusedForAStoredMapOfTheSameContent) {
+  HitVerifier verifier(store_.get(), size_t{64} << 20);
+  Verify(&verifier, 0.5);
+  // The query, then "a" and "b" (stored copies of the query's bytes): the
+  // first of them takes the query's preparation, the second is built.
+  EXPECT_EQ(verifier.maps_prepared(), 2u);
+  Verify(&verifier, 0.5);  // the query is prepared again, the hits are cached
+  EXPECT_EQ(verifier.maps_prepared(), 3u);
+
+  HitVerifier no_reverse(store_.get(), size_t{64} << 20);
+  Verify(&no_reverse);
+  EXPECT_EQ(no_reverse.maps_prepared(), 2u);  // no query preparation
 }
 
 }  // namespace
