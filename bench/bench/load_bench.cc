@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "client/lmd_client.h"
+#include "core/eval/ground_truth.h"
 #include "core/sim/simulate.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -82,6 +83,21 @@ double Percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
+// The simulated map a load-run id names: "seed-K" (the seeded run) or
+// "robotR-T" (robot R's map of tick T); nullptr for any other id.
+const LocalMap* MapOfId(const std::string& id, const std::vector<LocalMap>& seed,
+                        const std::vector<std::vector<LocalMap>>& robot_maps) {
+  const size_t dash = id.rfind('-');
+  if (dash == std::string::npos) return nullptr;
+  const std::string owner = id.substr(0, dash);
+  const size_t k = std::strtoul(id.c_str() + dash + 1, nullptr, 10);
+  if (owner == "seed") return k < seed.size() ? &seed[k] : nullptr;
+  if (owner.rfind("robot", 0) != 0) return nullptr;
+  const size_t r = std::strtoul(owner.c_str() + 5, nullptr, 10);
+  if (r >= robot_maps.size() || robot_maps[r].empty()) return nullptr;
+  return &robot_maps[r][k % robot_maps[r].size()];
+}
+
 }  // namespace
 
 int RunLoadBench(int argc, char** argv) {
@@ -98,8 +114,10 @@ int RunLoadBench(int argc, char** argv) {
     return 1;
   }
 
-  if (options.seed) {  // the stored world the robots localise against
-    const std::vector<LocalMap> base = SimulateLocalMaps(DefaultDemoOptions());
+  // The stored world the robots localise against (seeded by this run or an
+  // earlier one: the same simulation).
+  const std::vector<LocalMap> base = SimulateLocalMaps(DefaultDemoOptions());
+  if (options.seed) {
     ProgressBar progress("load: seeding " + options.collection, base.size());
     for (size_t i = 0; i < base.size(); i += 25) {
       v1::InsertMapsRequest request;
@@ -120,13 +138,15 @@ int RunLoadBench(int argc, char** argv) {
   // one map per tick (repeated if the route is short).
   const size_t ticks = static_cast<size_t>(std::ceil(options.hz * options.seconds));
   std::vector<std::vector<v1::InsertMapRequest>> plans(options.robots);
+  std::vector<std::vector<LocalMap>> robot_maps(options.robots);
   {
     ProgressBar progress("load: simulating robots", options.robots);
     for (int r = 0; r < options.robots; ++r) {
       SimulationOptions sim = DefaultDemoOptions();
       sim.route.seed = 1000 + r;
       sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
-      const std::vector<LocalMap> maps = SimulateLocalMaps(sim);
+      robot_maps[r] = SimulateLocalMaps(sim);
+      const std::vector<LocalMap>& maps = robot_maps[r];
       const std::string robot = "robot" + std::to_string(r);
       for (size_t t = 0; t < ticks && !maps.empty(); ++t) {
         plans[r].push_back(ToInsert(options.collection, robot, t, maps[t % maps.size()]));
@@ -140,6 +160,9 @@ int RunLoadBench(int argc, char** argv) {
   std::atomic<long> errors{0};
   std::atomic<long> calls{0};
   std::string first_error;           // guarded by mutex
+  // Per robot and tick, the top hit of its DetectChanges ("" if none).
+  std::vector<std::vector<std::string>> top_hits(options.robots);
+  for (int r = 0; r < options.robots; ++r) top_hits[r].resize(plans[r].size());
   const auto start = std::chrono::steady_clock::now();
   const auto period = std::chrono::duration<double>(1.0 / options.hz);
   std::vector<std::thread> robots;
@@ -176,13 +199,29 @@ int RunLoadBench(int argc, char** argv) {
           // The robot asks about stored maps other than the one it just sent.
           request.add_exclude_map_ids(map.metadata().map_id());
           v1::DetectChangesResponse response;
-          return (*client)->DetectChanges(request, &response);
+          const grpc::Status status = (*client)->DetectChanges(request, &response);
+          if (status.ok() && response.hits_size() > 0) top_hits[r][t] = response.hits(0).hit().map_id();
+          return status;
         });
       }
     });
   }
   for (auto& robot : robots) robot.join();
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // Localisation: does the top hit show the query's place (the product's
+  // criterion, core/eval: half of the query's points within 0.3 m of the
+  // hit's, in the world frame)? Among DetectChanges answered with a hit.
+  size_t answered = 0, localised = 0;
+  for (int r = 0; r < options.robots; ++r) {
+    for (size_t t = 0; t < top_hits[r].size(); ++t) {
+      const LocalMap* hit = MapOfId(top_hits[r][t], base, robot_maps);
+      if (hit == nullptr) continue;
+      ++answered;
+      localised += PlaceOverlap(robot_maps[r][t % robot_maps[r].size()], *hit) >= 0.5;
+    }
+  }
+  const double place_at_1 = answered > 0 ? static_cast<double>(localised) / static_cast<double>(answered) : 0.0;
 
   const double rps = static_cast<double>(calls.load()) / elapsed;
   const double p50 = Percentile(latencies_ms, 0.50), p95 = Percentile(latencies_ms, 0.95);
@@ -191,9 +230,12 @@ int RunLoadBench(int argc, char** argv) {
               options.hz, elapsed, calls.load(), rps);
   std::printf("latency p50=%.2f ms p95=%.2f ms p99=%.2f ms errors=%ld%s%s\n", p50, p95, p99, errors.load(),
               first_error.empty() ? "" : " first error: ", first_error.c_str());
+  std::printf("localisation: the top hit shows the robot's place for %zu of %zu answered DetectChanges (%.3f)\n",
+              localised, answered, place_at_1);
   if (options.json) {
-    std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld}\n",
-                options.robots, rps, p50, p95, p99, errors.load());
+    std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld, "
+                "\"place_at_1\": %.4f}\n",
+                options.robots, rps, p50, p95, p99, errors.load(), place_at_1);
   }
   return errors.load() == 0 ? 0 : 1;
 }
