@@ -77,6 +77,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_beams_per_scan") return SetUnsigned(key, value, &config->max_beams_per_scan);
   if (key == "max_maps_per_batch") return SetUnsigned(key, value, &config->max_maps_per_batch);
   if (key == "max_top_k") return SetUnsigned(key, value, &config->max_top_k);
+  if (key == "max_verify_candidates") return SetUnsigned(key, value, &config->max_verify_candidates);
   if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections);
   if (key == "max_abs_coordinate_m") {
     char* end = nullptr;

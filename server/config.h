@@ -30,6 +30,9 @@ struct ServerConfig {
   uint32_t max_maps_per_batch = 1000;
   // Largest top_k of Retrieve / DetectChanges.
   uint32_t max_top_k = 1000;
+  // Largest verify_candidates a Retrieve / DetectChanges request may ask for
+  // (each verified hit costs a scan match).
+  uint32_t max_verify_candidates = 100;
   // Number of collections.
   uint32_t max_collections = 1000;
   // Largest absolute coordinate of a point or pose, m. Catches unit mistakes

@@ -54,7 +54,7 @@ void AlignFromPose(const Frame& query_frame, const Frame& db_frame, const Pose2&
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     const std::string& collection, const v1::LocalMap& map, uint32_t top_k, v1::Method method,
-    const google::protobuf::RepeatedPtrField<std::string>& exclude) const {
+    const google::protobuf::RepeatedPtrField<std::string>& exclude, uint32_t verify_candidates) const {
   Status valid = ValidateCollectionName(collection);
   if (valid.ok()) valid = ValidateLocalMap(map, config_, "query map");
   if (!valid.ok()) return valid;
@@ -66,6 +66,11 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     return Status::InvalidArgument(std::to_string(exclude.size()) + " exclude_map_ids exceed max_top_k (" +
                                    std::to_string(config_.max_top_k) + ")");
   }
+  if (verify_candidates > config_.max_verify_candidates) {
+    return Status::InvalidArgument("verify_candidates " + std::to_string(verify_candidates) +
+                                   " exceeds max_verify_candidates (" +
+                                   std::to_string(config_.max_verify_candidates) + ")");
+  }
   Result<Method> core_method = CoreMethod(method, store_->indexing().viewpoint.planner);
   if (!core_method.ok()) return core_method.status();
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
@@ -76,8 +81,9 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   query.lmd = Describe(map, key);
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
-  const bool verify = method == v1::METHOD_DEFAULT && config_.verify_candidates > 0;
-  const size_t depth = verify ? std::max<size_t>(wanted, config_.verify_candidates) : wanted;
+  const size_t verify_depth = verify_candidates > 0 ? verify_candidates : config_.verify_candidates;
+  const bool verify = method == v1::METHOD_DEFAULT && verify_depth > 0;
+  const size_t depth = verify ? std::max(wanted, verify_depth) : wanted;
   // Excluded maps may take places in the index's ranking: ask for that many more.
   options.top_k = depth + exclude.size();
   options.method = *core_method;
@@ -96,7 +102,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   }
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
-        verifier_.Verify(collection, query.map, key, query.lmd, *hits, config_.verify_candidates,
+        verifier_.Verify(collection, query.map, key, query.lmd, *hits, verify_depth,
                          config_.verify_enough_matches, config_.reverse_conflict_weight);
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();
@@ -119,6 +125,7 @@ Result<v1::MapHit> LmdServiceImpl::ToWireHit(const std::string& collection, cons
   out.set_offset_y(hit.hit.hit.offset.y);
   Result<v1::MapMetadata> meta = store_->GetMetadata(collection, hit.hit.map_id);
   if (meta.ok()) *out.mutable_metadata() = std::move(meta).value();  // absent if deleted meanwhile
+  out.set_verified(hit.verified);
   if (hit.verified) {
     *out.mutable_pose() = ToProto(hit.pose);
   } else if (db != nullptr && method != v1::METHOD_BOW) {
@@ -134,7 +141,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
   return runner_->Unary(context, "Retrieve", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids());
+                                   request->exclude_map_ids(), request->verify_candidates());
     if (!query.ok()) return query.status();
     for (size_t rank = 0; rank < query->hits.size(); ++rank) {
       if (context->IsCancelled()) return Status::Cancelled("call cancelled");
@@ -156,7 +163,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     if (!(request->threshold() >= 0)) return Status::InvalidArgument("threshold must be >= 0 (0: the default)");
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids());
+                                   request->exclude_map_ids(), request->verify_candidates());
     if (!query.ok()) return query.status();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
 

@@ -25,6 +25,7 @@ constexpr char kUsage[] =
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "QUERY is --file POINTS or --log FILE --map K; M is default, lmd-cor, lmd-cog or bow;\n"
     "--exclude ID[,ID...] leaves those stored maps out of query / changes / render hits;\n"
+    "--verify N verifies the index's best N hits geometrically (default: the server's, 10; more when lost);\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 

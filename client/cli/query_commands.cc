@@ -1,6 +1,7 @@
 // ingest, query, changes and render of lmdctl.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 
@@ -23,8 +24,9 @@ Result<v1::Method> MethodFromArgs(const Args& args) {
   return Status::InvalidArgument("--method must be default, lmd-cor, lmd-cog or bow, got '" + name + "'");
 }
 
-// Fills the collection, map, top_k, method and excluded ids (--exclude
-// ID[,ID...]) of a Retrieve or DetectChanges request; 2 after printing a
+// Fills the collection, map, top_k, method, verification depth (--verify N)
+// and excluded ids (--exclude ID[,ID...]) of a Retrieve or DetectChanges
+// request; 2 after printing a
 // usage error, 1 after another error, else 0.
 template <typename Request>
 int FillQuery(const CommandContext& ctx, Request* request) {
@@ -39,6 +41,9 @@ int FillQuery(const CommandContext& ctx, Request* request) {
   Result<v1::Method> method = MethodFromArgs(ctx.args);
   if (!method.ok()) return Fail(method.status().message(), 2);
   request->set_method(*method);
+  Result<long> verify = GetPositive(ctx.args, "verify", 0);  // 0: the server's default
+  if (!verify.ok()) return Fail(verify.status().message(), 2);
+  request->set_verify_candidates(static_cast<uint32_t>(std::min<long>(*verify, UINT32_MAX)));
   const std::string exclude = ctx.args.Get("exclude");
   for (size_t begin = 0; begin < exclude.size();) {
     const size_t end = std::min(exclude.find(',', begin), exclude.size());
@@ -54,7 +59,7 @@ void PrintHit(const v1::MapHit& hit) {
   if (hit.has_pose()) {
     std::printf("  pose=(%.2f m, %.2f m, %.1f deg)", hit.pose().x(), hit.pose().y(), hit.pose().theta() * 180 / M_PI);
   }
-  std::printf("\n");
+  std::printf("%s\n", hit.verified() ? "  verified" : "");
 }
 
 }  // namespace

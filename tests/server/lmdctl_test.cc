@@ -36,6 +36,11 @@ CliRun RunLmdctl(const std::string& args, const TempDir& dir) {
 }
 
 int CountLines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
+int CountOccurrences(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+  return n;
+}
 
 class LmdctlTest : public ::testing::Test {
  protected:
@@ -130,6 +135,14 @@ TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   EXPECT_GT(CountLines(others.out), 0);
   EXPECT_EQ(others.out.find("\"map_id\":\"robot-4\""), std::string::npos) << others.out;
   EXPECT_EQ(others.out.find("\"map_id\":\"robot-3\""), std::string::npos) << others.out;
+  // --verify: how many hits lmdd verifies (each verified hit says so); 0 is a usage error.
+  CliRun deep = RunLmdctl(base + "--json query --collection fleet --top-k 3 --verify 1 --log " + dir_.path() +
+                              "/robot.log --map 4", dir_);
+  ASSERT_EQ(deep.exit_code, 0) << deep.err;
+  EXPECT_EQ(CountOccurrences(deep.out, "\"verified\":true"), 1) << deep.out;
+  EXPECT_EQ(RunLmdctl(base + "query --collection fleet --verify 0 --log " + dir_.path() + "/robot.log --map 4", dir_)
+                .exit_code,
+            2);
 
   CliRun render = RunLmdctl(base + "render --collection fleet --log " + dir_.path() + "/robot.log --map 4 --out " +
                                 dir_.path() + "/r.svg", dir_);

@@ -166,6 +166,36 @@ TEST_F(RetrievalServiceTest, ExcludedMapsAreNeverReturned) {
   EXPECT_NE(status.error_message().find("exclude_map_ids"), std::string::npos) << status.error_message();
 }
 
+TEST_F(RetrievalServiceTest, RequestChoosesHowManyHitsAreVerified) {
+  v1::InsertMapsRequest insert;
+  for (int i = 0; i < 24; ++i) {  // shifted copies of one place
+    *insert.add_maps() = OneMapRequest("site", "copy" + std::to_string(i), CornerMap(0.3 * i, -0.2 * i)).maps(0);
+  }
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(insert, &inserted).ok());
+  auto verified_hits = [&](uint32_t verify_candidates) {
+    v1::RetrieveRequest request = Query(CornerMap(1.0, 1.0), 20);
+    request.set_verify_candidates(verify_candidates);
+    v1::RetrieveResponse response;
+    const grpc::Status status = server_->client().Retrieve(request, &response);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    EXPECT_EQ(response.hits_size(), 20);
+    int verified = 0;
+    for (const v1::MapHit& hit : response.hits()) verified += hit.verified();
+    return verified;
+  };
+  EXPECT_EQ(verified_hits(0), static_cast<int>(server::ServerConfig().verify_candidates));  // the server's default
+  EXPECT_EQ(verified_hits(20), 20);
+  EXPECT_EQ(verified_hits(3), 3);
+
+  v1::RetrieveRequest too_many = Query(CornerMap(1.0, 1.0));
+  too_many.set_verify_candidates(server::ServerConfig().max_verify_candidates + 1);
+  v1::RetrieveResponse response;
+  const grpc::Status status = server_->client().Retrieve(too_many, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("max_verify_candidates"), std::string::npos) << status.error_message();
+}
+
 TEST_F(RetrievalServiceTest, TopKZeroMeansTheDefault) {
   v1::RetrieveResponse response;
   ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(0, 0), 0), &response).ok());
