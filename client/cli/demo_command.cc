@@ -95,6 +95,9 @@ int DemoCommand(const CommandContext& ctx) {
     request.set_collection(collection);
     *request.mutable_map() = ToProto(query);
     request.set_top_k(5);
+    // Robot 2 does not know where it is in robot 1's maps: it asks for a
+    // deeper verification than a tracking robot's 10 (4 vs 3 of 8 localised).
+    request.set_verify_candidates(40);
     v1::DetectChangesResponse response;
     const grpc::Status status = ctx.client.DetectChanges(request, &response);
     if (!status.ok()) return FailCall(status);
