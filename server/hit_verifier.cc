@@ -63,8 +63,10 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
   if (std::shared_ptr<const PreparedMap> cached = Find(key)) return cached;
   Result<v1::StoredMap> stored = store_->GetMap(collection, hit.map_id);
   if (!stored.ok()) return stored.status();
-  std::shared_ptr<const PreparedMap> prepared =
-      Take(ContentKey(DescriptorCache::KeyOf(stored->map().SerializeAsString()), heading));
+  std::shared_ptr<const PreparedMap> prepared;
+  if (query_maps_kept_) {  // hashing the stored map costs about 5 % of preparing it
+    prepared = Take(ContentKey(DescriptorCache::KeyOf(stored->map().SerializeAsString()), heading));
+  }
   if (!prepared) prepared = Prepare(FromProto(stored->map()), heading);
   Put(key, prepared);
   return prepared;
@@ -116,6 +118,7 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
     if (!query_map) {
       query_map = Prepare(query, heading);
       Put(key, query_map);
+      query_maps_kept_ = true;
     }
   }
   for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options, query_map.get())) {

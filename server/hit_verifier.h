@@ -74,6 +74,7 @@ class HitVerifier {
   const MapStore* const store_;
   const size_t capacity_bytes_;
   std::atomic<size_t> maps_prepared_{0};
+  std::atomic<bool> query_maps_kept_{false};  // a query's prepared map was ever cached
   std::mutex mutex_;
   size_t cached_bytes_ = 0;  // guarded by mutex_
   // Guarded by mutex_: most recent first; key "<collection>/<index id>" for
