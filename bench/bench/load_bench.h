@@ -10,7 +10,7 @@
 // time. Reports calls/s and p50/p95/p99 latency over all calls, errors, and
 // how often the top hit of a DetectChanges showed the robot's place (half of
 // its points within 0.3 m of the hit's, in the world frame; computed after
-// the run); with --json the last line is {"robots": R, "rps": x, "p50_ms": a,
+// the run, for a collection holding the seed and this run's maps only); with --json the last line is {"robots": R, "rps": x, "p50_ms": a,
 // "p95_ms": b, "p99_ms": c, "errors": n, "place_at_1": p}.
 #pragma once
 
