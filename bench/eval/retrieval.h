@@ -47,6 +47,10 @@ struct MethodSpec {
   bool global_fallback = true;   // guess-free scan matching when the guided match is poor
   bool lazy_global = true;       // ... only if no candidate matched near its guess (VerifyConfig)
   double verify_window_m = 1.0;  // m, scan-matching window around each guess (VerifyConfig)
+  // Unverified maps up to this many positions before or after a matched map
+  // in its log (the same robot's route: they overlap it) rank just after it,
+  // lower by kNeighbourStep per position (0 = off).
+  size_t neighbour_window = 0;
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
   // Masks whose points the verified db map explains (a db point within 0.3 m
