@@ -29,7 +29,7 @@ std::string BatchCollection(const v1::InsertMapsRequest& request) {
 }  // namespace
 
 LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner,
-                               const CallMetrics* metrics)
+                               CallMetrics* metrics)
     : config_(config),
       store_(store),
       runner_(runner),

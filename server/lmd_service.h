@@ -20,7 +20,7 @@ namespace lmd::server {
 class LmdServiceImpl final : public v1::LmdService::CallbackService {
  public:
   // `store`, `runner` and `metrics` must outlive the service.
-  LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner, const CallMetrics* metrics);
+  LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner, CallMetrics* metrics);
 
   grpc::ServerUnaryReactor* InsertMaps(grpc::CallbackServerContext* context, const v1::InsertMapsRequest* request,
                                        v1::InsertMapsResponse* response) override;
@@ -80,7 +80,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const ServerConfig config_;
   MapStore* const store_;
   CallRunner* const runner_;
-  const CallMetrics* const metrics_;
+  CallMetrics* const metrics_;
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable DescriptorCache cache_;
   mutable HitVerifier verifier_;

@@ -434,7 +434,7 @@ Status MapStore::ListMaps(const std::string& collection, const std::string& afte
 }
 
 Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, const Lmd& query,
-                                                 const RetrieveOptions& options) const {
+                                                 const RetrieveOptions& options, RetrieveStats* stats) const {
   const CollectionState* state = nullptr;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -442,7 +442,7 @@ Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, 
   }
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
-  Result<std::vector<MapHit>> hits = state->index.Retrieve(query, options);
+  Result<std::vector<MapHit>> hits = state->index.Retrieve(query, options, stats);
   if (!hits.ok()) return hits.status();
   std::vector<StoreHit> out;
   out.reserve(hits->size());

@@ -39,6 +39,10 @@ class ColumnFamilyHandle;
 class DB;
 }  // namespace rocksdb
 
+namespace lmd {
+struct RetrieveStats;  // core/index/index.h
+}  // namespace lmd
+
 namespace lmd::server {
 
 struct MapStoreOptions {
@@ -100,8 +104,9 @@ class MapStore {
 
   // The collection's best maps for `query` (see core/index/index.h).
   // NotFound for an unknown collection; InvalidArgument for bad options.
+  // `stats` (optional) receives the index's work counters.
   Result<std::vector<StoreHit>> Retrieve(const std::string& collection, const Lmd& query,
-                                         const RetrieveOptions& options) const;
+                                         const RetrieveOptions& options, RetrieveStats* stats = nullptr) const;
 
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in

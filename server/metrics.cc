@@ -60,6 +60,16 @@ std::vector<v1::MethodStats> CallMetrics::Snapshot() const {
   return out;
 }
 
+void CallMetrics::RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read,
+                                  uint64_t hits_verified) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++work_.queries;
+  work_.maps_touched += maps_touched;
+  work_.maps_scored += maps_scored;
+  work_.postings_read += postings_read;
+  work_.hits_verified += hits_verified;
+}
+
 std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s) const {
   std::ostringstream out;
   out << "# HELP lmd_uptime_seconds Seconds since lmdd started.\n# TYPE lmd_uptime_seconds gauge\n"
@@ -91,6 +101,15 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
     out << "lmd_call_duration_seconds_sum{method=\"" << name << "\"} " << m.total_ms / 1000.0 << "\n";
     out << "lmd_call_duration_seconds_count{method=\"" << name << "\"} " << m.calls << "\n";
   }
+  auto counter = [&](const char* name, const char* help, uint64_t value) {
+    out << "# HELP " << name << " " << help << "\n# TYPE " << name << " counter\n" << name << " " << value << "\n";
+  };
+  counter("lmd_queries_total", "Retrieve and DetectChanges queries that reached the index.", work_.queries);
+  counter("lmd_query_maps_touched_total", "Stored maps with a posting read, summed over queries.", work_.maps_touched);
+  counter("lmd_query_maps_scored_total", "Stored maps scored exactly by the kernel, summed over queries.",
+          work_.maps_scored);
+  counter("lmd_query_postings_read_total", "Index postings read, summed over queries.", work_.postings_read);
+  counter("lmd_query_hits_verified_total", "Hits verified by scan matching, summed over queries.", work_.hits_verified);
   return out.str();
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
@@ -17,6 +18,13 @@ class CallMetrics {
  public:
   // Records one finished call. `code` is the gRPC status code (0 = OK).
   void Record(const std::string& method, int code, double latency_ms);
+
+  // Records the work of one query (Retrieve or DetectChanges) that reached
+  // the index: maps with a posting read, maps scored exactly, postings read
+  // (core/index/index.h RetrieveStats) and hits verified by scan matching.
+  // Exported as Prometheus counters, so that an operator sees what
+  // max_maps_scored and verify_candidates cost.
+  void RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read, uint64_t hits_verified);
 
   // Calls, errors and latency percentiles per method, by method name.
   // Percentiles are bucket upper bounds: within 10 % of the true value.
@@ -41,8 +49,13 @@ class CallMetrics {
   };
   static double Percentile(const Method& method, double q);
 
+  struct QueryWork {
+    uint64_t queries = 0, maps_touched = 0, maps_scored = 0, postings_read = 0, hits_verified = 0;
+  };
+
   mutable std::mutex mutex_;
   std::map<std::string, Method> methods_;  // guarded by mutex_
+  QueryWork work_;                         // guarded by mutex_
 };
 
 }  // namespace lmd::server

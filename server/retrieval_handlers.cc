@@ -7,6 +7,7 @@
 
 #include "core/align/relative_pose.h"
 #include "core/change/geometric_changes.h"
+#include "core/index/index.h"
 #include "proto/convert.h"
 #include "server/indexing.h"
 #include "server/lmd_service.h"
@@ -91,7 +92,8 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     options.max_offset_m = config_.default_max_offset_m;
     options.max_maps_scored = config_.max_maps_scored;
   }
-  Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options);
+  RetrieveStats work;
+  Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options, &work);
   if (!hits.ok()) return hits.status();
   if (!exclude.empty()) {
     const std::unordered_set<std::string> excluded(exclude.begin(), exclude.end());
@@ -109,6 +111,9 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   } else {
     for (const StoreHit& hit : *hits) query.hits.push_back({hit, false, hit.hit.score, {}, nullptr});
   }
+  size_t verified = 0;
+  for (const VerifiedStoreHit& hit : query.hits) verified += hit.verified;
+  metrics_->RecordQueryWork(work.maps_touched, work.maps_scored, work.postings_read, verified);
   if (query.hits.size() > wanted) query.hits.resize(wanted);
   return query;
 }

@@ -77,5 +77,43 @@ TEST(MetricsTest, PrometheusEndpointServesCallsAndCollections) {
   EXPECT_NE(HttpGet((*server)->metrics_port(), "/other").find("404"), std::string::npos);
 }
 
+// The counter's value in a Prometheus page, or -1 if it is absent.
+long CounterValue(const std::string& page, const std::string& name) {
+  const size_t at = page.find("\n" + name + " ");
+  return at == std::string::npos ? -1 : std::stol(page.substr(at + name.size() + 2));
+}
+
+TEST(MetricsTest, PrometheusCountsTheWorkOfQueries) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.metrics_listen = "127.0.0.1:0";
+  config.listen = "127.0.0.1:0";
+  config.data_dir = dir.path();
+  auto server = server::LmdServer::Start(config);
+  ASSERT_TRUE(server.ok()) << server.status().ToString();
+  client::ClientOptions options;
+  options.target = "127.0.0.1:" + std::to_string((*server)->port());
+  auto client = std::move(client::LmdClient::Create(options)).value();
+  v1::InsertMapsRequest insert;
+  for (const char* id : {"a", "b", "c"}) *insert.add_maps() = OneMapRequest("site", id, SquareRoomMap()).maps(0);
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(client->InsertMaps(insert, &inserted).ok());
+  EXPECT_EQ(CounterValue(HttpGet((*server)->metrics_port(), "/metrics"), "lmd_queries_total"), 0);
+
+  v1::RetrieveRequest query;
+  query.set_collection("site");
+  *query.mutable_map() = SquareRoomMap();
+  query.set_verify_candidates(2);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(client->Retrieve(query, &response).ok());
+  ASSERT_TRUE(client->Retrieve(query, &response).ok());
+  const std::string page = HttpGet((*server)->metrics_port(), "/metrics");
+  EXPECT_EQ(CounterValue(page, "lmd_queries_total"), 2) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_query_maps_touched_total"), 6) << page;  // the three maps, twice
+  EXPECT_EQ(CounterValue(page, "lmd_query_maps_scored_total"), 6) << page;
+  EXPECT_GT(CounterValue(page, "lmd_query_postings_read_total"), 0) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_query_hits_verified_total"), 4) << page;  // two per query
+}
+
 }  // namespace
 }  // namespace lmd::testing
