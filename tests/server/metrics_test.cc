@@ -54,27 +54,40 @@ TEST(MetricsTest, StatsCountCallsAndErrorsPerMethod) {
   EXPECT_EQ(stats.collections(0).maps(), 1u);
 }
 
-TEST(MetricsTest, PrometheusEndpointServesCallsAndCollections) {
-  TempDir dir;
-  server::ServerConfig config;
-  config.metrics_listen = "127.0.0.1:0";
-  config.listen = "127.0.0.1:0";
-  config.data_dir = dir.path();
-  auto server = server::LmdServer::Start(config);
-  ASSERT_TRUE(server.ok()) << server.status().ToString();
-  ASSERT_GT((*server)->metrics_port(), 0);
-  client::ClientOptions options;
-  options.target = "127.0.0.1:" + std::to_string((*server)->port());
-  auto client = std::move(client::LmdClient::Create(options)).value();
-  v1::InsertMapsResponse inserted;
-  ASSERT_TRUE(client->InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+// An lmdd on loopback with its /metrics endpoint, and a client.
+class PrometheusTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server::ServerConfig config;
+    config.metrics_listen = "127.0.0.1:0";
+    config.listen = "127.0.0.1:0";
+    config.data_dir = dir_.path();
+    auto server = server::LmdServer::Start(config);
+    ASSERT_TRUE(server.ok()) << server.status().ToString();
+    server_ = std::move(server).value();
+    ASSERT_GT(server_->metrics_port(), 0);
+    client::ClientOptions options;
+    options.target = "127.0.0.1:" + std::to_string(server_->port());
+    client_ = std::move(client::LmdClient::Create(options)).value();
+  }
 
-  const std::string page = HttpGet((*server)->metrics_port(), "/metrics");
+  std::string Page(const std::string& path = "/metrics") { return HttpGet(server_->metrics_port(), path); }
+
+  TempDir dir_;
+  std::unique_ptr<server::LmdServer> server_;
+  std::unique_ptr<client::LmdClient> client_;
+};
+
+TEST_F(PrometheusTest, EndpointServesCallsAndCollections) {
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(client_->InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+
+  const std::string page = Page();
   EXPECT_NE(page.find("200 OK"), std::string::npos) << page;
   EXPECT_NE(page.find("lmd_calls_total{method=\"InsertMaps\",code=\"OK\"} 1"), std::string::npos) << page;
   EXPECT_NE(page.find("lmd_collection_maps{collection=\"site\"} 1"), std::string::npos) << page;
   EXPECT_NE(page.find("lmd_call_duration_seconds_count{method=\"InsertMaps\"} 1"), std::string::npos) << page;
-  EXPECT_NE(HttpGet((*server)->metrics_port(), "/other").find("404"), std::string::npos);
+  EXPECT_NE(Page("/other").find("404"), std::string::npos);
 }
 
 // The counter's value in a Prometheus page, or -1 if it is absent.
@@ -83,31 +96,21 @@ long CounterValue(const std::string& page, const std::string& name) {
   return at == std::string::npos ? -1 : std::stol(page.substr(at + name.size() + 2));
 }
 
-TEST(MetricsTest, PrometheusCountsTheWorkOfQueries) {
-  TempDir dir;
-  server::ServerConfig config;
-  config.metrics_listen = "127.0.0.1:0";
-  config.listen = "127.0.0.1:0";
-  config.data_dir = dir.path();
-  auto server = server::LmdServer::Start(config);
-  ASSERT_TRUE(server.ok()) << server.status().ToString();
-  client::ClientOptions options;
-  options.target = "127.0.0.1:" + std::to_string((*server)->port());
-  auto client = std::move(client::LmdClient::Create(options)).value();
+TEST_F(PrometheusTest, CountsTheWorkOfQueries) {
   v1::InsertMapsRequest insert;
   for (const char* id : {"a", "b", "c"}) *insert.add_maps() = OneMapRequest("site", id, SquareRoomMap()).maps(0);
   v1::InsertMapsResponse inserted;
-  ASSERT_TRUE(client->InsertMaps(insert, &inserted).ok());
-  EXPECT_EQ(CounterValue(HttpGet((*server)->metrics_port(), "/metrics"), "lmd_queries_total"), 0);
+  ASSERT_TRUE(client_->InsertMaps(insert, &inserted).ok());
+  EXPECT_EQ(CounterValue(Page(), "lmd_queries_total"), 0);
 
   v1::RetrieveRequest query;
   query.set_collection("site");
   *query.mutable_map() = SquareRoomMap();
   query.set_verify_candidates(2);
   v1::RetrieveResponse response;
-  ASSERT_TRUE(client->Retrieve(query, &response).ok());
-  ASSERT_TRUE(client->Retrieve(query, &response).ok());
-  const std::string page = HttpGet((*server)->metrics_port(), "/metrics");
+  ASSERT_TRUE(client_->Retrieve(query, &response).ok());
+  ASSERT_TRUE(client_->Retrieve(query, &response).ok());
+  const std::string page = Page();
   EXPECT_EQ(CounterValue(page, "lmd_queries_total"), 2) << page;
   EXPECT_EQ(CounterValue(page, "lmd_query_maps_touched_total"), 6) << page;  // the three maps, twice
   EXPECT_EQ(CounterValue(page, "lmd_query_maps_scored_total"), 6) << page;
