@@ -33,11 +33,15 @@ int main(int argc, char** argv) {
   drive.route.seed = 42;
   drive.route.length_m = 20.0;
   drive.local_map.id_prefix = "robot42";
+  bool lost = true;  // until a verified hit places the robot
   for (const lmd::LocalMap& map : lmd::SimulateLocalMaps(drive)) {
     lmd::v1::DetectChangesRequest query;
     query.set_collection(collection);
     *query.mutable_map() = lmd::ToProto(map);
     query.set_top_k(3);
+    // A lost robot asks lmdd to verify more of the index's hits (slower,
+    // finds its place more often); a tracking one takes the server's default.
+    query.set_verify_candidates(lost ? 40 : 0);
     lmd::v1::DetectChangesResponse answer;
     grpc::Status status = (*client)->DetectChanges(query, &answer);
     if (status.error_code() == grpc::StatusCode::NOT_FOUND) {
@@ -45,11 +49,14 @@ int main(int argc, char** argv) {
     } else if (!status.ok()) {
       std::fprintf(stderr, "robot: DetectChanges failed: %s\n", status.error_message().c_str());
       return 1;
-    } else if (answer.hits_size() > 0 && answer.hits(0).hit().has_pose()) {
-      const auto& hit = answer.hits(0).hit();
-      std::printf("%s: like stored map %s (K=%.3f), my frame at (%.2f, %.2f) %.1f deg in its frame, %d changes\n",
-                  map.id.c_str(), hit.map_id().c_str(), hit.score(), hit.pose().x(), hit.pose().y(),
-                  hit.pose().theta() * 180 / M_PI, answer.hits(0).masks_size());
+    } else {
+      lost = answer.hits_size() == 0 || !answer.hits(0).hit().verified();
+      if (!lost) {
+        const auto& hit = answer.hits(0).hit();
+        std::printf("%s: like stored map %s (score %.3f), my frame at (%.2f, %.2f) %.1f deg in its frame, %d changes\n",
+                    map.id.c_str(), hit.map_id().c_str(), hit.score(), hit.pose().x(), hit.pose().y(),
+                    hit.pose().theta() * 180 / M_PI, answer.hits(0).masks_size());
+      }
     }
 
     lmd::v1::InsertMapsRequest insert;
