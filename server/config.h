@@ -72,7 +72,8 @@ struct ServerConfig {
   // overlap. 0: the default method is the index alone (LMD kernel). With 10,
   // lmd-bench load at 60 robots cost lmdd 13.8 ms of CPU per robot-second;
   // 20, lmd-eval's best, gains about 0.07 place recall@1 on the real logs
-  // (docs/results.md) and cost 20.5 ms in the same test.
+  // (docs/results.md) and cost 20.5 ms in the same test. A request may ask
+  // for another depth (verify_candidates, up to max_verify_candidates).
   uint32_t verify_candidates = 10;
   // Verification stops once this many candidates matched well (verification
   // score >= 0.8); the rest are returned unverified, in index order. 0:
