@@ -19,6 +19,11 @@ std::string ContentKey(const DescriptorCache::Key& key, double heading) {
 
 }  // namespace
 
+size_t HitVerifier::cached_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return cached_bytes_;
+}
+
 std::shared_ptr<const PreparedMap> HitVerifier::Find(const std::string& key) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = index_.find(key);

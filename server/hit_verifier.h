@@ -56,6 +56,8 @@ class HitVerifier {
 
   // How many maps this verifier has prepared (PrepareMap calls), queries included.
   size_t maps_prepared() const { return maps_prepared_; }
+  // Bytes the cache holds now.
+  size_t cached_bytes() const;
 
  private:
   // The prepared db map of a hit, from the cache (by index id, or by content
@@ -75,7 +77,7 @@ class HitVerifier {
   const size_t capacity_bytes_;
   std::atomic<size_t> maps_prepared_{0};
   std::atomic<bool> query_maps_kept_{false};  // a query's prepared map was ever cached
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   size_t cached_bytes_ = 0;  // guarded by mutex_
   // Guarded by mutex_: most recent first; key "<collection>/<index id>" for
   // db maps, "content/<key>/<heading>" for queries.

@@ -75,6 +75,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
 
  public:
   double uptime_s() const;
+  const HitVerifier& verifier() const { return verifier_; }
 
  private:
   const ServerConfig config_;

@@ -70,7 +70,8 @@ void CallMetrics::RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, u
   work_.hits_verified += hits_verified;
 }
 
-std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s) const {
+std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
+                                        const VerifierCache& verifier) const {
   std::ostringstream out;
   out << "# HELP lmd_uptime_seconds Seconds since lmdd started.\n# TYPE lmd_uptime_seconds gauge\n"
       << "lmd_uptime_seconds " << uptime_s << "\n";
@@ -110,6 +111,10 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
           work_.maps_scored);
   counter("lmd_query_postings_read_total", "Index postings read, summed over queries.", work_.postings_read);
   counter("lmd_query_hits_verified_total", "Hits verified by scan matching, summed over queries.", work_.hits_verified);
+  counter("lmd_maps_prepared_total", "Maps prepared for scan matching (misses of the prepared-map cache).",
+          verifier.maps_prepared);
+  out << "# HELP lmd_prepared_cache_bytes Bytes held by the prepared-map cache (prepared_map_cache_mb).\n"
+      << "# TYPE lmd_prepared_cache_bytes gauge\nlmd_prepared_cache_bytes " << verifier.bytes << "\n";
   return out.str();
 }
 

@@ -30,9 +30,17 @@ class CallMetrics {
   // Percentiles are bucket upper bounds: within 10 % of the true value.
   std::vector<v1::MethodStats> Snapshot() const;
 
-  // Prometheus text exposition (version 0.0.4) of the calls and of
-  // `collections` (maps, points, postings per collection).
-  std::string PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s) const;
+  // What the hit verifier's cache of prepared maps did (server/hit_verifier.h).
+  struct VerifierCache {
+    uint64_t maps_prepared = 0;  // preparations since start (cache misses)
+    uint64_t bytes = 0;          // bytes held now
+  };
+
+  // Prometheus text exposition (version 0.0.4) of the calls, of
+  // `collections` (maps, points, postings per collection) and of the
+  // verifier's cache.
+  std::string PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
+                             const VerifierCache& verifier) const;
 
  private:
   // Latency buckets grow by 10 %: bucket i holds latencies up to

@@ -115,7 +115,8 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
     const MapStore* store_ptr = server->store_.get();
     const CallMetrics* metrics = server->metrics_.get();
     Result<std::unique_ptr<MetricsHttpServer>> http = MetricsHttpServer::Start(config.metrics_listen, [=] {
-      return metrics->PrometheusText(store_ptr->ListCollections(), service->uptime_s());
+      const CallMetrics::VerifierCache cache{service->verifier().maps_prepared(), service->verifier().cached_bytes()};
+      return metrics->PrometheusText(store_ptr->ListCollections(), service->uptime_s(), cache);
     });
     if (!http.ok()) {
       server->Shutdown(std::chrono::milliseconds(0));

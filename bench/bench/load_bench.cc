@@ -25,6 +25,7 @@ struct LoadOptions {
   std::string collection = "load";
   std::string token;
   int robots = 10;
+  int first_robot = 0;  // robots are first_robot .. first_robot + robots - 1 (several generators, one lmdd)
   double hz = 1.0;
   double seconds = 10.0;
   bool json = false;
@@ -46,6 +47,7 @@ bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
     else if (flag == "--collection") options->collection = value;
     else if (flag == "--token") options->token = value;
     else if (flag == "--robots") options->robots = static_cast<int>(std::strtol(value.c_str(), &end, 10));
+    else if (flag == "--first-robot") options->first_robot = static_cast<int>(std::strtol(value.c_str(), &end, 10));
     else if (flag == "--hz") options->hz = std::strtod(value.c_str(), &end);
     else if (flag == "--seconds") options->seconds = std::strtod(value.c_str(), &end);
     else {
@@ -57,9 +59,11 @@ bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
       return false;
     }
   }
-  if (options->robots < 1 || options->robots > 5000 || !(options->hz > 0) || options->hz > 100 ||
-      !(options->seconds > 0) || options->seconds > 3600) {
-    std::fprintf(stderr, "lmd-bench load: need 1 <= robots <= 5000, 0 < hz <= 100, 0 < seconds <= 3600\n");
+  if (options->robots < 1 || options->robots > 5000 || options->first_robot < 0 || options->first_robot > 100000 ||
+      !(options->hz > 0) || options->hz > 100 || !(options->seconds > 0) || options->seconds > 3600) {
+    std::fprintf(stderr,
+                 "lmd-bench load: need 1 <= robots <= 5000, 0 <= first-robot <= 100000, 0 < hz <= 100, "
+                 "0 < seconds <= 3600\n");
     return false;
   }
   return true;
@@ -84,17 +88,20 @@ double Percentile(std::vector<double> values, double q) {
 }
 
 // The simulated map a load-run id names: "seed-K" (the seeded run) or
-// "robotR-T" (robot R's map of tick T); nullptr for any other id.
+// "robotR-T" (robot R's map of tick T, R counted from first_robot); nullptr
+// for any other id, including robots of another generator.
 const LocalMap* MapOfId(const std::string& id, const std::vector<LocalMap>& seed,
-                        const std::vector<std::vector<LocalMap>>& robot_maps) {
+                        const std::vector<std::vector<LocalMap>>& robot_maps, int first_robot) {
   const size_t dash = id.rfind('-');
   if (dash == std::string::npos) return nullptr;
   const std::string owner = id.substr(0, dash);
   const size_t k = std::strtoul(id.c_str() + dash + 1, nullptr, 10);
   if (owner == "seed") return k < seed.size() ? &seed[k] : nullptr;
   if (owner.rfind("robot", 0) != 0) return nullptr;
-  const size_t r = std::strtoul(owner.c_str() + 5, nullptr, 10);
-  if (r >= robot_maps.size() || robot_maps[r].empty()) return nullptr;
+  const long robot = std::strtol(owner.c_str() + 5, nullptr, 10) - first_robot;
+  if (robot < 0 || static_cast<size_t>(robot) >= robot_maps.size()) return nullptr;
+  const size_t r = static_cast<size_t>(robot);
+  if (robot_maps[r].empty()) return nullptr;
   return &robot_maps[r][k % robot_maps[r].size()];
 }
 
@@ -143,11 +150,11 @@ int RunLoadBench(int argc, char** argv) {
     ProgressBar progress("load: simulating robots", options.robots);
     for (int r = 0; r < options.robots; ++r) {
       SimulationOptions sim = DefaultDemoOptions();
-      sim.route.seed = 1000 + r;
+      sim.route.seed = 1000 + options.first_robot + r;
       sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
       robot_maps[r] = SimulateLocalMaps(sim);
       const std::vector<LocalMap>& maps = robot_maps[r];
-      const std::string robot = "robot" + std::to_string(r);
+      const std::string robot = "robot" + std::to_string(options.first_robot + r);
       for (size_t t = 0; t < ticks && !maps.empty(); ++t) {
         plans[r].push_back(ToInsert(options.collection, robot, t, maps[t % maps.size()]));
       }
@@ -215,7 +222,7 @@ int RunLoadBench(int argc, char** argv) {
   size_t answered = 0, localised = 0;
   for (int r = 0; r < options.robots; ++r) {
     for (size_t t = 0; t < top_hits[r].size(); ++t) {
-      const LocalMap* hit = MapOfId(top_hits[r][t], base, robot_maps);
+      const LocalMap* hit = MapOfId(top_hits[r][t], base, robot_maps, options.first_robot);
       if (hit == nullptr) continue;
       ++answered;
       localised += PlaceOverlap(robot_maps[r][t % robot_maps[r].size()], *hit) >= 0.5;

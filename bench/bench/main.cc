@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
                 "commands:\n"
                 "  index --maps N [--queries Q] [--json]   inverted file vs exhaustive scorer on simulated maps\n"
                 "  load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]\n"
-                "                                          simulated robots inserting and detecting changes\n"
+                "       [--no-seed] [--first-robot N]      simulated robots inserting and detecting changes\n"
                 "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
                 "                                          store N simulated maps (scale runs)\n");
     return command.empty() ? 2 : 0;

@@ -21,6 +21,7 @@ struct RetrieveScratch {
   std::vector<uint32_t> bounds;  // kLmd pass 1: 4 per slot, 2^L * raw K bound per orientation
   std::vector<uint32_t> tables;  // kLmd pass 1: per list read, see RetrieveLmd
   std::vector<uint32_t> term_gains;
+  std::vector<uint64_t> term_masks;
   std::vector<uint8_t> term_o;
   KernelScratch kernel;
 };
@@ -228,17 +229,26 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     uint32_t table;
     uint32_t query_count;  // query features with the list's word
     bool one_term_each;    // at most one active term per orientation
-    // Otherwise, per active term: its orientation (term_o[terms + a]) and its
-    // gain per finest cell (term_gains[(terms + a) * cells + sub]).
+    // Otherwise, per active term: its orientation (term_o[terms + a]) and
+    // where it gains what: with at most 64 finest cells, per level l >= 1
+    // the finest cells where it meets level l as bits
+    // (term_masks[(terms + a) * levels + l - 1]; cells nest, so the masks
+    // shrink with l), else its gain per finest cell
+    // (term_gains[(terms + a) * cells + sub]).
     uint32_t terms;
     uint32_t term_count;
   };
   std::vector<ListRead> reads;
   std::vector<uint32_t>& tables = sc.tables;
   std::vector<uint32_t>& term_gains = sc.term_gains;
+  std::vector<uint64_t>& term_masks = sc.term_masks;
   std::vector<uint8_t>& term_o = sc.term_o;
-  tables.clear(), term_gains.clear(), term_o.clear();
+  tables.clear(), term_gains.clear(), term_masks.clear(), term_o.clear();
   const int32_t side = 1 << levels, cells = side * side;
+  // A map's run of postings in a list then gains, per term, gain[the highest
+  // level whose mask meets the run's cells]: a few tests per term instead
+  // of one look-up per posting and term.
+  const bool use_masks = cells <= 64;
   // Pass 1, per distinct query word: read each posting list that can matter
   // once; per map, add what its run of postings in the list can contribute
   // to 2^L * raw K per orientation (see the caps in 1b). A query feature
@@ -298,7 +308,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
       for (const Term* t : active) read.one_term_each &= ++terms_per_orientation[t->o] <= 1;
       if (!read.one_term_each) {
         read.term_count = static_cast<uint32_t>(active.size());
-        term_gains.resize(term_gains.size() + active.size() * static_cast<size_t>(cells));
+        if (use_masks) {
+          term_masks.resize(term_masks.size() + active.size() * static_cast<size_t>(levels), 0);
+        } else {
+          term_gains.resize(term_gains.size() + active.size() * static_cast<size_t>(cells));
+        }
       }
       tables.resize(tables.size() + static_cast<size_t>(cells) * 8, 0);
       uint32_t* table = tables.data() + read.table;
@@ -314,7 +328,13 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
             }
             const int32_t sub = sx * side + sy;
             table[static_cast<size_t>(sub) * 4 + static_cast<size_t>(t.o)] += gain[met];
-            if (!read.one_term_each) term_gains[(read.terms + a) * static_cast<size_t>(cells) + sub] = gain[met];
+            if (read.one_term_each) continue;
+            if (!use_masks) {
+              term_gains[(read.terms + a) * static_cast<size_t>(cells) + sub] = gain[met];
+              continue;
+            }
+            for (int l = 1; l <= met; ++l)
+              term_masks[(read.terms + a) * static_cast<size_t>(levels) + static_cast<size_t>(l - 1)] |= uint64_t{1} << sub;
           }
         }
         if (!read.one_term_each) term_o.push_back(static_cast<uint8_t>(t.o));
@@ -356,6 +376,15 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
           for (size_t k = r; k < re; ++k) {
             const uint32_t* g = &table[static_cast<size_t>(list[k].sub()) * 4];
             for (int o = 0; o < 4; ++o) sum[o] = std::max(sum[o], g[o]);
+          }
+        } else if (use_masks) {
+          uint64_t run = 0;
+          for (size_t k = r; k < re; ++k) run |= uint64_t{1} << list[k].sub();
+          for (uint32_t a = 0; a < read.term_count; ++a) {
+            const uint64_t* masks = &term_masks[(read.terms + a) * static_cast<size_t>(levels)];
+            int met = levels;
+            while (met > 0 && (run & masks[met - 1]) == 0) --met;
+            sum[term_o[read.terms + a]] += gain[met];
           }
         } else {
           for (uint32_t a = 0; a < read.term_count; ++a) {

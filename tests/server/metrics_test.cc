@@ -116,6 +116,9 @@ TEST_F(PrometheusTest, CountsTheWorkOfQueries) {
   EXPECT_EQ(CounterValue(page, "lmd_query_maps_scored_total"), 6) << page;
   EXPECT_GT(CounterValue(page, "lmd_query_postings_read_total"), 0) << page;
   EXPECT_EQ(CounterValue(page, "lmd_query_hits_verified_total"), 4) << page;  // two per query
+  // The second query verifies the same two maps: prepared once, then cached.
+  EXPECT_EQ(CounterValue(page, "lmd_maps_prepared_total"), 2) << page;
+  EXPECT_GT(CounterValue(page, "lmd_prepared_cache_bytes"), 0) << page;
 }
 
 }  // namespace
