@@ -33,24 +33,36 @@ void TraceFree(const OccupancyGrid& grid, uint8_t* cells, double ax, double ay, 
   const long row_step = step_y > 0 ? width : -width;
   size_t k = static_cast<size_t>(iy) * width + ix;
   constexpr uint8_t kFree = static_cast<uint8_t>(CellState::kFree);
-  const int max_steps = std::abs(end_x - ix) + std::abs(end_y - iy) + 1;
-  for (int n = 0; n <= max_steps; ++n) {
-    const bool at_end = ix == end_x && iy == end_y;
-    if (at_end && stop_before_end) return;
-    cells[k] = kFree;
-    if (at_end) return;
+  // Next cell along the beam; false when it leaves the grid.
+  auto step = [&] {
     if (t_x < t_y) {
       ix += step_x;
-      if (ix < 0 || ix >= width) return;
+      if (ix < 0 || ix >= width) return false;
       k += step_x;
       t_x += t_dx;
     } else {
       iy += step_y;
-      if (iy < 0 || iy >= height) return;
+      if (iy < 0 || iy >= height) return false;
       k += row_step;
       t_y += t_dy;
     }
+    return true;
+  };
+  // Every step moves one cell towards the end cell (the directions are fixed),
+  // so the beam can be in the end cell only after exactly `to_end` steps: no
+  // test per cell before that.
+  const int to_end = std::abs(end_x - ix) + std::abs(end_y - iy);
+  for (int n = 0; n < to_end; ++n) {
+    cells[k] = kFree;
+    if (!step()) return;
   }
+  if (ix == end_x && iy == end_y) {
+    if (!stop_before_end) cells[k] = kFree;
+    return;
+  }
+  // Rounding passed the end cell by: two more cells, then stop.
+  cells[k] = kFree;
+  if (step()) cells[k] = kFree;
 }
 
 // Marks cells within radius of segment a-b (grid axes) free.

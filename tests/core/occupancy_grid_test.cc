@@ -46,6 +46,38 @@ TEST(OccupancyGridTest, RayCastingMarksFreeOccupiedAndUnknown) {
   EXPECT_NEAR(grid.cell_m(), 0.1, 1e-12);
 }
 
+TEST(OccupancyGridTest, ABeamFreesTheCellsItCrossesUpToItsReturn) {
+  // One beam at a time, at angles that cross cells diagonally; the map's
+  // only points are corners beyond the beam's reach, so that the grid covers it.
+  for (double angle_deg : {0.0, 17.0, 45.0, 100.0, 200.0, 301.0}) {
+    for (bool hit : {true, false}) {
+      LocalMap map;
+      map.points = {{-3.5, -3.5}, {3.5, 3.5}};
+      Scan s;
+      s.pose = {0.03, 0.07, 0};
+      s.first_angle = static_cast<float>(angle_deg * M_PI / 180);
+      s.max_range = 10;
+      s.ranges = {hit ? 2.34f : 10.0f};
+      map.scans.push_back(s);
+      GridOptions options;
+      options.crop_m = 0;
+      options.no_return_clear_m = 2.34;
+      const OccupancyGrid grid = BuildOccupancyGrid(map, 0.0, options);
+      int x0, y0, x1, y1;
+      grid.CellOf({0.03, 0.07}, &x0, &y0);
+      const double a = s.first_angle;
+      grid.CellOf({0.03 + 2.34 * std::cos(a), 0.07 + 2.34 * std::sin(a)}, &x1, &y1);
+      // A 4-connected path from the robot's cell to the return's: one cell per
+      // step, the return's cell left unknown when the beam hit something there.
+      const size_t path = static_cast<size_t>(std::abs(x1 - x0) + std::abs(y1 - y0)) + 1;
+      SCOPED_TRACE(testing::Message() << angle_deg << " deg, hit " << hit);
+      EXPECT_EQ(grid.Count(CellState::kFree), hit ? path - 1 : path);
+      EXPECT_EQ(grid.at(x0, y0), CellState::kFree);
+      EXPECT_EQ(grid.at(x1, y1), hit ? CellState::kUnknown : CellState::kFree);
+    }
+  }
+}
+
 TEST(OccupancyGridTest, MapsWithoutScansAreFreeNearTheTrajectory) {
   LocalMap map;
   map.trajectory = {{0, 0, 0}, {4, 0, 0}};
