@@ -107,8 +107,14 @@ struct ServerConfig {
   // the query's own map was exact scoring's for 202 queries, and it showed
   // the query's place as often (0.961); on the five other logs, 177 of 179
   // and 0.966 vs 0.972. lmdd's CPU per robot-second fell by 13 % at 80
-  // robots (lmd-bench load).
-  uint32_t max_maps_scored = 200;
+  // robots (lmd-bench load). Re-measured with this build on the same
+  // queries: the best hit differs from exact scoring's for 4 (200), 7 (150)
+  // and 8 (100) of the 204; the first hit from another pass shows the
+  // query's place for 84 (exact), 83, 83 and 82 of 141, and on the five
+  // other logs for 57 (200), 57 and 55 of 84 (150 and 200: the same best hit
+  // for all 179). 150 spends 3.3 % fewer instructions per robot-second under
+  // load than 200 (callgrind), 100 6.8 %.
+  uint32_t max_maps_scored = 150;
   // true: index each feature with its 3 m inner word too, 64 features per
   // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
   // when a store is created (a store made with the other setting is refused).
