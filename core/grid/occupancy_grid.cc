@@ -60,7 +60,7 @@ void TraceFree(const OccupancyGrid& grid, uint8_t* cells, double ax, double ay, 
     if (!stop_before_end) cells[k] = kFree;
     return;
   }
-  // Rounding passed the end cell by: two more cells, then stop.
+  // Rounding made the beam miss the end cell: two more cells, then stop.
   cells[k] = kFree;
   if (step()) cells[k] = kFree;
 }
