@@ -6,6 +6,7 @@
 #include <random>
 #include <utility>
 
+#include "core/util/full_turn_angle.h"
 #include "core/viewpoint/viewpoint.h"
 
 namespace lmd {
@@ -103,9 +104,7 @@ void FineHistogram(const PointBuckets& pts, double cx, double cy, double radius,
     double ws = u - s0;
     if (s0 < 0) s0 = 0, ws = 0;
     if (s0 >= shells - 1) s0 = shells - 1, ws = 0;
-    double a = std::atan2(static_cast<double>(dy), static_cast<double>(dx));
-    if (a < 0) a += 2 * M_PI;
-    const double v = a * sector_scale;  // sector centres at integers
+    const double v = FullTurnAngle(dy, dx) * sector_scale;  // sector centres at integers
     const int a0 = static_cast<int>(std::floor(v)) % kFineSectors, a1 = (a0 + 1) % kFineSectors;
     const double wa = v - std::floor(v);
     double* row0 = hist.data() + static_cast<size_t>(s0) * kFineSectors;
