@@ -223,7 +223,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
         place.push_back({kept[i]->prepared.get(), kept[i]->pose, i});
       }
     }
-    for (const ChangeMask& mask : GeometricChanges(query->map.points, query->map.trajectory, place)) {
+    for (const ChangeMask& mask : GeometricChanges(query->map.points, query->map.trajectory, query->map.scans, place)) {
       add_mask(mask.db_map_id, mask, v1::MASK_SOURCE_GEOMETRIC);
     }
     for (const ChangeMask& mask : *masks) {  // ranked by the hit's K, then r

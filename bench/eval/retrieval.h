@@ -62,6 +62,7 @@ struct MethodSpec {
   // Geometric masks ranked by evidence (free-space margin, range); false: by point count.
   bool masks_by_evidence = true;
   double mask_explained_radius_m = GeometricChangeOptions().explained_radius_m;
+  double mask_seen_through_share = GeometricChangeOptions().seen_through_share;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

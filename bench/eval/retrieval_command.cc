@@ -160,6 +160,11 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.mask_explained_radius_m = 0.3;
   a.change_eval = true;
   v.push_back(a);
+  a = ablation("abl_keep_moving",
+               "geometric change masks keep points the query's own scans saw through (things that moved)");
+  a.mask_seen_through_share = 1.0;
+  a.change_eval = true;
+  v.push_back(a);
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
   a.verify_top_n = 20;
   v.push_back(a);
@@ -500,6 +505,7 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
       GeometricChangeOptions go;
       go.rank_by_evidence = m.masks_by_evidence;
       go.explained_radius_m = m.mask_explained_radius_m;
+      go.seen_through_share = m.mask_seen_through_share;
       std::vector<ChangeMask> all = verifier->Changes(aligned, q.changed, go);
       for (ChangeMask& mk : *masks) all.push_back(std::move(mk));
       *masks = std::move(all);

@@ -133,7 +133,7 @@ std::vector<ChangeMask> Verifier::Changes(const std::vector<std::pair<size_t, Po
                                           const GeometricChangeOptions& options) const {
   std::vector<AlignedMap> maps;
   for (const auto& [db, pose] : aligned) maps.push_back({&impl_->Map(db), pose, db});
-  return GeometricChanges(query.points, query.trajectory, maps, options);
+  return GeometricChanges(query.points, query.trajectory, query.scans, maps, options);
 }
 
 }  // namespace lmd::eval

@@ -1,5 +1,7 @@
 #include "core/change/geometric_changes.h"
 
+#include "core/change/sightings.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -80,10 +82,28 @@ double RangeOf(const Point2& p, const std::vector<Pose2>& trajectory) {
   return std::isfinite(best2) ? std::sqrt(best2) : 0.0;
 }
 
+// Removes the change points (with their evidence and free votes, n per
+// point) that the query's own scans saw through more than `share` of the
+// times they saw them at all: things that moved while the robot mapped.
+void DropSeenThrough(const std::vector<Sightings>& sightings, double share, size_t n, std::vector<Point2>* changed,
+                     std::vector<double>* evidence, std::vector<uint8_t>* seen_free) {
+  size_t kept = 0;
+  for (size_t i = 0; i < changed->size(); ++i) {
+    const double seen = sightings[i].returns + sightings[i].through;
+    if (seen > 0 && sightings[i].through > share * seen) continue;
+    (*changed)[kept] = (*changed)[i];
+    (*evidence)[kept] = (*evidence)[i];
+    std::copy_n(seen_free->begin() + i * n, n, seen_free->begin() + kept * n);
+    ++kept;
+  }
+  changed->resize(kept), evidence->resize(kept), seen_free->resize(kept * n);
+}
+
 }  // namespace
 
 std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points,
                                          const std::vector<Pose2>& query_trajectory,
+                                         const std::vector<Scan>& query_scans,
                                          const std::vector<AlignedMap>& maps,
                                          const GeometricChangeOptions& options) {
   struct Placed {
@@ -126,6 +146,10 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
       }
     }
     evidence.push_back(weight);
+  }
+  if (options.seen_through_share < 1.0 && !query_scans.empty()) {
+    DropSeenThrough(CountSightings(changed, query_scans), options.seen_through_share, n, &changed, &evidence,
+                    &seen_free);
   }
   std::vector<ChangeMask> masks;
   for (const std::vector<size_t>& group : LinkedGroups(changed, options.merge_radius_m)) {
