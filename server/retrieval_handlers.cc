@@ -3,6 +3,7 @@
 // changes) run the change detector against each hit's stored descriptor.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
 
 #include "core/align/relative_pose.h"
@@ -22,6 +23,8 @@ constexpr uint32_t kDefaultTopK = 10;
 // because the change itself adds conflicts; lmd-eval's best uses 0.2 on its
 // own consistency score (bench/eval, docs/results.md).
 constexpr double kShowsPlaceScore = 0.2;
+// ... and within this of the best such hit (PlaceHits, geometric_changes.h).
+constexpr double kPlaceScoreWindow = 0.3;
 
 // The core method for a wire method, or InvalidArgument if this store's
 // index cannot serve it (it indexes one planner's descriptors).
@@ -217,11 +220,13 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
       }
     };
     // Geometric masks against the verified hits that show the query's place (id = position in kept).
+    std::vector<double> verified_scores;
+    for (const VerifiedStoreHit* hit : kept) {
+      verified_scores.push_back(hit->verified && hit->prepared ? hit->score : -std::numeric_limits<double>::infinity());
+    }
     std::vector<AlignedMap> place;
-    for (size_t i = 0; i < kept.size(); ++i) {
-      if (kept[i]->verified && kept[i]->score >= kShowsPlaceScore && kept[i]->prepared) {
-        place.push_back({kept[i]->prepared.get(), kept[i]->pose, i});
-      }
+    for (size_t i : PlaceHits(verified_scores, kShowsPlaceScore, kPlaceScoreWindow)) {
+      place.push_back({kept[i]->prepared.get(), kept[i]->pose, i});
     }
     for (const ChangeMask& mask : GeometricChanges(query->map.points, query->map.trajectory, query->map.scans, place)) {
       add_mask(mask.db_map_id, mask, v1::MASK_SOURCE_GEOMETRIC);

@@ -63,6 +63,9 @@ struct MethodSpec {
   bool masks_by_evidence = true;
   double mask_explained_radius_m = GeometricChangeOptions().explained_radius_m;
   double mask_seen_through_share = GeometricChangeOptions().seen_through_share;
+  // Geometric masks against the matched hits whose re-ranking key is within
+  // this of the best matched hit's (PlaceHits).
+  double mask_key_window = 0.3;
   std::string note;              // one line for the ablation table: what differs from best
 };
 

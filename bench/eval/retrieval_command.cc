@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -43,6 +44,7 @@ namespace lmd::eval {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 // ---------------------------------------------------------------------------
@@ -163,6 +165,11 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_keep_moving",
                "geometric change masks keep points the query's own scans saw through (things that moved)");
   a.mask_seen_through_share = 1.0;
+  a.change_eval = true;
+  v.push_back(a);
+  a = ablation("abl_all_matched_masks",
+               "geometric change masks against every matched hit, not only those within 0.3 of the best's key");
+  a.mask_key_window = kInf;
   a.change_eval = true;
   v.push_back(a);
   a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
@@ -499,9 +506,9 @@ void EvalChangeTask(const Dataset& d, size_t qi, const QueryRun& run, const Desc
     if (verifier && m.geometric_masks) {
       // Geometric masks against the matched hits, before the descriptor's masks.
       std::vector<std::pair<size_t, Pose2>> aligned;
-      for (const Scored& h : run.top) {
-        if (h.matched) aligned.push_back({h.db, h.pose});
-      }
+      std::vector<double> keys;
+      for (const Scored& h : run.top) keys.push_back(h.matched ? h.final_score : -kInf);
+      for (size_t i : PlaceHits(keys, -kInf, m.mask_key_window)) aligned.push_back({run.top[i].db, run.top[i].pose});
       GeometricChangeOptions go;
       go.rank_by_evidence = m.masks_by_evidence;
       go.explained_radius_m = m.mask_explained_radius_m;

@@ -177,4 +177,17 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
   return masks;
 }
 
+std::vector<size_t> PlaceHits(const std::vector<double>& scores, double min_score, double window) {
+  auto held = [&](double s) { return std::isfinite(s) && s >= min_score; };
+  double best = -std::numeric_limits<double>::infinity();
+  for (double s : scores) {
+    if (held(s)) best = std::max(best, s);
+  }
+  std::vector<size_t> out;
+  for (size_t i = 0; i < scores.size(); ++i) {
+    if (held(scores[i]) && scores[i] >= best - window) out.push_back(i);
+  }
+  return out;
+}
+
 }  // namespace lmd
