@@ -20,8 +20,8 @@ namespace {
 constexpr uint32_t kDefaultTopK = 10;
 // Verification score (overlap - 2 conflicts, verify_hits.h) from which a hit
 // is taken to show the query's place, so that geometry may name changes. Low
-// because the change itself adds conflicts; lmd-eval's best uses 0.2 on its
-// own consistency score (bench/eval, docs/results.md).
+// because the change itself adds conflicts; lmd-eval's best uses 0 on its own
+// consistency score (with reverse conflicts; bench/eval, docs/results.md).
 constexpr double kShowsPlaceScore = 0.2;
 // ... and within this of the best such hit (PlaceHits, geometric_changes.h).
 constexpr double kPlaceScoreWindow = 0.3;

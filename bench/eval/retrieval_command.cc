@@ -422,11 +422,13 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
       // kMeanDist: maps that show the place (overlap >= 0.5) first, then the
       // smallest mean distance (the relevant map's definition).
       const double consistency = a.overlap - 2.0 * a.conflict - 4.0 * a.reverse_conflict;
-      // Shows the place, for the geometric change masks. Not 0.5: the change
-      // itself puts query points in the db map's free space (conflicts), so a
-      // right hit of a changed query scores lower; 0.2 named the change in
-      // the top mask most often on orebro, fr101 and intel (0, 0.2, 0.3, 0.5).
-      s.matched = consistency >= 0.2;
+      // Shows the place, for the geometric change masks and route neighbours.
+      // Not 0.5: the change itself puts query points in the db map's free
+      // space (conflicts), so a right hit of a changed query scores lower.
+      // 0.2 named the change in the top mask most often on orebro, fr101 and
+      // intel (0, 0.2, 0.3, 0.5) until masks were held against the best
+      // matched hits only (PlaceHits); since then 0 (docs/results.md).
+      s.matched = consistency >= 0.0;
       double key = consistency;
       if (m.rerank == Rerank::kOverlap) key = a.overlap;
       if (m.rerank == Rerank::kMeanDist) key = (consistency >= 0.5 ? 1.0 : 0.0) + 1.0 / (1.0 + a.mean_dist_m);

@@ -1,12 +1,12 @@
 #include "core/change/geometric_changes.h"
 
-#include "core/change/sightings.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <unordered_map>
+
+#include "core/change/sightings.h"
 
 namespace lmd {
 namespace {
