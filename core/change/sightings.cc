@@ -20,7 +20,11 @@ std::vector<Sightings> CountSightings(const std::vector<Point2>& points, const s
                                       const SightingOptions& options) {
   std::vector<Sightings> out(points.size());
   const double two_pi = 2.0 * M_PI;
-  for (const Scan& scan : scans) {
+  const size_t bound = std::max<size_t>(options.max_point_scan_pairs, 1);
+  const size_t per_scan = std::max<size_t>(points.size(), 1);
+  const size_t stride = (scans.size() * per_scan + bound - 1) / bound;  // ceil; 0 when there are no scans
+  for (size_t s = 0; s < scans.size(); s += std::max<size_t>(stride, 1)) {
+    const Scan& scan = scans[s];
     const size_t n = scan.ranges.size();
     const double step = scan.angle_step;
     if (n == 0 || !(std::fabs(step) > 0.0) || !std::isfinite(step) || !std::isfinite(scan.pose.x) ||

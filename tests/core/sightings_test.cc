@@ -78,6 +78,25 @@ TEST(SightingsTest, BeamsWithoutReturnClearUpToTheirLimit) {
   EXPECT_EQ(seen[1].returns + seen[1].through, 0u);
 }
 
+// Over the work bound, every k-th scan is read: the counts shrink, the
+// shares stay.
+TEST(SightingsTest, ManyPointsAndScansReadEveryKthScan) {
+  std::vector<Scan> scans;
+  for (int k = 0; k < 6; ++k) scans.push_back(WallScan(0.1 * k));
+  const std::vector<Point2> points = {{5.0, 0.2}, {2.0, 0.1}};
+  SightingOptions options;
+  options.max_point_scan_pairs = 12;  // 2 points x 6 scans: all read
+  const std::vector<Sightings> all = CountSightings(points, scans, options);
+  EXPECT_EQ(all[0].returns, 6u);
+  EXPECT_EQ(all[1].through, 6u);
+  options.max_point_scan_pairs = 5;  // every third scan
+  const std::vector<Sightings> some = CountSightings(points, scans, options);
+  EXPECT_EQ(some[0].returns, 2u);
+  EXPECT_EQ(some[0].through, 0u);
+  EXPECT_EQ(some[1].through, 2u);
+  EXPECT_EQ(some[1].returns, 0u);
+}
+
 TEST(SightingsTest, NonFiniteInputCountsNeitherWay) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   Scan bad_pose = WallScan(0.0);
