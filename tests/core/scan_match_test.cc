@@ -178,13 +178,13 @@ TEST(ScanMatchTest, VerifyHitsMovesTheTruePlaceFromFifthToFirst) {
   ASSERT_EQ(wrong.size(), 4u);
   std::vector<HitCandidate> candidates;
   for (size_t k = 0; k < wrong.size(); ++k) {
-    candidates.push_back({100 + k, std::make_shared<PreparedMap>(PrepareMap(maps[wrong[k]])), 0.9 - 0.1 * k, {}});
+    candidates.push_back({100 + k, std::make_shared<PreparedMap>(PrepareMap(maps[wrong[k]])), 0.9 - 0.1 * k, {}, {}});
   }
   // The true place comes with a retrieval-like guess (1.3 m, 6 deg off); the
   // others with none (guess-free search).
   const Pose2 truth = Compose(Inverse(maps[relevant].truth.global_frame), maps[query].truth.global_frame);
   const Pose2 guess{truth.x + 1.0, truth.y - 0.8, truth.theta + Deg(6)};
-  candidates.push_back({7, std::make_shared<PreparedMap>(PrepareMap(maps[relevant])), 0.1, {guess}});
+  candidates.push_back({7, std::make_shared<PreparedMap>(PrepareMap(maps[relevant])), 0.1, {guess}, {}});
   const std::vector<VerifiedHit> hits = VerifyHits(maps[query], candidates);
   ASSERT_EQ(hits.size(), 5u);
   EXPECT_EQ(hits[0].map_id, 7u);
@@ -203,7 +203,7 @@ TEST(ScanMatchTest, VerifyHitsSkipsTheGuessFreeSearchOnceACandidateMatched) {
   const Pose2 far_off{truth.x + 6.0, truth.y - 5.0, truth.theta};  // far outside the guided window
   // Candidate 1 matches at its guess; candidate 2 (same place, bad guess) is
   // left to its guided score.
-  const std::vector<HitCandidate> candidates = {{1, prepared, 0.9, {truth}}, {2, prepared, 0.8, {far_off}}};
+  const std::vector<HitCandidate> candidates = {{1, prepared, 0.9, {truth}, {}}, {2, prepared, 0.8, {far_off}, {}}};
   const std::vector<VerifiedHit> lazy = VerifyHits(query, candidates);
   ASSERT_EQ(lazy.size(), 2u);
   EXPECT_EQ(lazy[0].map_id, 1u);
@@ -272,8 +272,8 @@ TEST(ScanMatchTest, ReverseConflictsLowerAMapWithPointsInTheQuerysFreeSpace) {
   ASSERT_EQ(cluttered.points.size(), query.points.size() + 40);
   const Pose2 identity{0, 0, 0};
   const std::vector<HitCandidate> candidates = {
-      {1, std::make_shared<PreparedMap>(PrepareMap(query)), 0.9, {identity}},
-      {2, std::make_shared<PreparedMap>(PrepareMap(cluttered)), 0.8, {identity}}};
+      {1, std::make_shared<PreparedMap>(PrepareMap(query)), 0.9, {identity}, {}},
+      {2, std::make_shared<PreparedMap>(PrepareMap(cluttered)), 0.8, {identity}, {}}};
   VerifyOptions options;
   options.reverse_conflict_weight = 4.0;
   auto by_id = [](const std::vector<VerifiedHit>& hits, uint64_t id) {
@@ -292,7 +292,7 @@ TEST(ScanMatchTest, ReverseConflictsLowerAMapWithPointsInTheQuerysFreeSpace) {
 }
 
 TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
-  std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}}, {2, nullptr, 0.5, {}}, {3, nullptr, 0.9, {}}};
+  std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}, {}}, {2, nullptr, 0.5, {}, {}}, {3, nullptr, 0.9, {}, {}}};
   VerifyOptions options;
   options.max_candidates = 2;
   const std::vector<VerifiedHit> hits = VerifyHits(RichMap(), candidates, options);
@@ -322,8 +322,8 @@ TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
       EXPECT_EQ(MatchLocalMapsGlobal(PrepareQuery(*q), PrepareMap(*d)).score, 0.0);
     }
   }
-  std::vector<HitCandidate> candidates = {{1, std::make_shared<PreparedMap>(PrepareMap(empty)), 1.0, {guess}},
-                                          {2, std::make_shared<PreparedMap>(PrepareMap(one)), 0.5, {}}};
+  std::vector<HitCandidate> candidates = {{1, std::make_shared<PreparedMap>(PrepareMap(empty)), 1.0, {guess}, {}},
+                                          {2, std::make_shared<PreparedMap>(PrepareMap(one)), 0.5, {}, {}}};
   for (const VerifiedHit& h : VerifyHits(empty, candidates)) EXPECT_EQ(h.score, 0.0);
   for (const VerifiedHit& h : VerifyHits(one, candidates)) EXPECT_EQ(h.score, 0.0);
 }
