@@ -22,9 +22,8 @@ constexpr uint32_t kDefaultTopK = 10;
 // is taken to show the query's place, so that geometry may name changes. Low
 // because the change itself adds conflicts; lmd-eval's best uses 0 on its own
 // consistency score (with reverse conflicts; bench/eval, docs/results.md).
+// Masks are held against such hits within kPlaceHitsWindow of the best.
 constexpr double kShowsPlaceScore = 0.2;
-// ... and within this of the best such hit (PlaceHits, geometric_changes.h).
-constexpr double kPlaceScoreWindow = 0.3;
 
 // The core method for a wire method, or InvalidArgument if this store's
 // index cannot serve it (it indexes one planner's descriptors).
@@ -225,7 +224,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
       verified_scores.push_back(hit->verified && hit->prepared ? hit->score : -std::numeric_limits<double>::infinity());
     }
     std::vector<AlignedMap> place;
-    for (size_t i : PlaceHits(verified_scores, kShowsPlaceScore, kPlaceScoreWindow)) {
+    for (size_t i : PlaceHits(verified_scores, kShowsPlaceScore, kPlaceHitsWindow)) {
       place.push_back({kept[i]->prepared.get(), kept[i]->pose, i});
     }
     for (const ChangeMask& mask : GeometricChanges(query->map.points, query->map.trajectory, query->map.scans, place)) {

@@ -65,7 +65,7 @@ struct MethodSpec {
   double mask_seen_through_share = GeometricChangeOptions().seen_through_share;
   // Geometric masks against the matched hits whose re-ranking key is within
   // this of the best matched hit's (PlaceHits).
-  double mask_key_window = 0.3;
+  double mask_key_window = kPlaceHitsWindow;
   std::string note;              // one line for the ablation table: what differs from best
 };
 
