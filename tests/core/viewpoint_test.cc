@@ -34,6 +34,31 @@ TEST(EntropyCompassTest, RotatingAMapMovesTheOrientationByTheSameAngleModulo90) 
   }
 }
 
+// Points every 5 cm along a w x h rectangle's outline, turned by deg about (cx, cy).
+std::vector<Point2> RectangleOutline(double cx, double cy, double w, double h, double deg) {
+  const double c = std::cos(deg * M_PI / 180.0), s = std::sin(deg * M_PI / 180.0);
+  std::vector<Point2> out;
+  auto add = [&](double x, double y) { out.push_back({cx + c * x - s * y, cy + s * x + c * y}); };
+  for (double t = -w / 2; t <= w / 2; t += 0.05) add(t, -h / 2), add(t, h / 2);
+  for (double t = -h / 2; t <= h / 2; t += 0.05) add(-w / 2, t), add(w / 2, t);
+  return out;
+}
+
+TEST(EntropyCompassTest, TheDirectionWithMoreWallWins) {
+  // Two buildings turned 35 deg from each other: the coarse sweep sees a
+  // peak for each, and the estimate follows the one with more wall, so that
+  // neither peak wins by its position in the sweep.
+  for (const bool first_is_bigger : {true, false}) {
+    std::vector<Point2> points = RectangleOutline(0, 0, first_is_bigger ? 12 : 5, first_is_bigger ? 8 : 4, 20.0);
+    for (const Point2& p : RectangleOutline(15, 3, first_is_bigger ? 5 : 12, first_is_bigger ? 4 : 8, 55.0)) {
+      points.push_back(p);
+    }
+    const double want = first_is_bigger ? 20.0 : 55.0;
+    EXPECT_LT(DiffMod90Deg(EstimateDominantOrientation(points), want * M_PI / 180.0), 1.0)
+        << "bigger building at " << want << " deg";
+  }
+}
+
 TEST(EntropyCompassTest, TooFewPointsGiveZero) {
   EXPECT_EQ(EstimateDominantOrientation({}), 0.0);
   EXPECT_EQ(EstimateDominantOrientation({{1, 2}}), 0.0);
