@@ -43,6 +43,9 @@ struct MethodSpec {
   bool stationary = false;       // queries without simulated change
   // Verification of the first stage's top hits (0 = none).
   size_t verify_top_n = 0;
+  // When none of those matched (a hit showing the place), verify this many
+  // more, the next of the first stage's ranking (0 = never).
+  size_t verify_more_if_unmatched = 0;
   Rerank rerank = Rerank::kOverlap;
   bool global_fallback = true;   // guess-free scan matching when the guided match is poor
   bool lazy_global = true;       // ... only if no candidate matched near its guess (VerifyConfig)
