@@ -87,14 +87,13 @@ MethodSpec BestMethod() {
   // consistency - distance key, 20 -> 40 gave place@1 0.77 -> 0.79 (seed 2)
   // at 1.8x the time per query (docs/results.md).
   m.verify_top_n = 40;
-  // The first stage ranks the place below 40 for about one query in ten
-  // (11 % before inner words, docs/results.md).
-  // When none of the 40 matched, 40 more: place@1 0.802 -> 0.824, change
-  // success@1 0.688 -> 0.704 on all nine logs with seed 3 (no log worse), at
-  // 1.3x the time per query; 0.761 -> 0.781 on the six confirmation logs
-  // (seed 2, 80 queries each), where it was first seen; on the tuning logs
-  // (seed 1) place@1 0.917 -> 0.912 (orebro one query worse, intel two
-  // better). Row abl_no_verify_more.
+  // The first stage ranks the place below 40 for about one query in ten (11 %
+  // before inner words, docs/results.md), so when none of the 40 matched, 40
+  // more: place@1 0.802 -> 0.824, change success@1 0.688 -> 0.704 on all
+  // nine logs with seed 3 (no log worse), at 1.3x the time per query; 0.761
+  // -> 0.781 on the six confirmation logs (seed 2, 80 queries each), where it
+  // was first seen; on the tuning logs (seed 1) place@1 0.917 -> 0.912
+  // (orebro one query worse, intel two better). Row abl_no_verify_more.
   m.verify_more_if_unmatched = 40;
   // Consistency minus half the mean distance: +0.04 / +0.02 place@1 over
   // kMeanDist (its threshold at consistency 0.5 let a wrong map with a smaller
