@@ -112,6 +112,10 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
     return SetNumber(key, value, [](double m) { return m > 0 && m <= 50; }, "a number of metres in (0, 50]",
                      &config->default_max_offset_m);
   }
+  if (key == "bound_skip_postings_per_map") {
+    return SetNumber(key, value, [](double n) { return n >= 0 && n <= 1e6; }, "a number in [0, 1e6]",
+                     &config->bound_skip_postings_per_map);
+  }
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "inner_words") return SetBool(key, value, &config->inner_words);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);

@@ -115,6 +115,18 @@ struct ServerConfig {
   // for all 179). 150 spends 3.3 % fewer instructions per robot-second under
   // load than 200 (callgrind), 100 6.8 %.
   uint32_t max_maps_scored = 150;
+  // The default method's index skips, in its first pass, the posting lists
+  // of words with more than this many postings per stored map
+  // (RetrieveOptions::bound_skip_postings_per_map); 0: reads every list.
+  // On the fleet's demo world four words hold about a third of all postings
+  // and most of what a query reads. lmd-bench load at 150 robots for 30 s
+  // read 70k instead of 106k postings per query at the end (4.7k maps),
+  // with place_at_1 0.953 both; 2 read 50k but lost place_at_1 (0.940), 1
+  // more (0.914). Callgrind on the 2.3k-map store: 38.65 vs 40.82 M
+  // instructions per robot-second. On the real logs it changed little:
+  // of the 204 lmdctl queries on intel, aces, mit and fr079, the first hit
+  // from another pass showed the place for 84 (3) vs 83 (0) of 141.
+  double bound_skip_postings_per_map = 3.0;
   // true: index each feature with its 3 m inner word too, 64 features per
   // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
   // when a store is created (a store made with the other setting is refused).

@@ -93,6 +93,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   if (method == v1::METHOD_DEFAULT) {
     options.max_offset_m = config_.default_max_offset_m;
     options.max_maps_scored = config_.max_maps_scored;
+    options.bound_skip_postings_per_map = config_.bound_skip_postings_per_map;
   }
   RetrieveStats work;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options, &work);

@@ -195,10 +195,10 @@ Result<std::vector<MapHit>> Index::Retrieve(const Lmd& query, const RetrieveOpti
   const PreparedLmdQuery q =
       PrepareLmdQuery(WithoutStopWords(std::move(features).value(), StopWords(options.max_word_share)), options_, options);
   if (options.method == Method::kBow) return RetrieveBow(q, options.top_k, stats);
-  return RetrieveLmd(q, options.top_k, options.max_maps_scored, stats);
+  return RetrieveLmd(q, options, stats);
 }
 
-std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored,
+std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, const RetrieveOptions& options,
                                        RetrieveStats* stats) const {
   RetrieveScratch& sc = Scratch();
   if (sc.bounds.size() < slot_id_.size() * 4) sc.bounds.resize(slot_id_.size() * 4, 0);
@@ -249,6 +249,10 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   // level whose mask meets the run's cells]: a few tests per term instead
   // of one look-up per posting and term.
   const bool use_masks = cells <= 64;
+  // What the query features of the words pass 1 skips could add to 2^L * raw
+  // K, per orientation (RetrieveOptions::bound_skip_postings_per_map).
+  const double skip_above = options.bound_skip_postings_per_map * static_cast<double>(size());
+  uint32_t skipped_gain = 0;
   // Pass 1, per distinct query word: read each posting list that can matter
   // once; per map, add what its run of postings in the list can contribute
   // to 2^L * raw K per orientation (see the caps in 1b). A query feature
@@ -262,6 +266,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     const uint32_t query_count = static_cast<uint32_t>(e - i);
     const auto word_lists = word_lists_.find(word);
     if (word_lists == word_lists_.end()) {
+      i = e;
+      continue;
+    }
+    if (skip_above > 0 && static_cast<double>(word_postings_.at(word)) > skip_above) {
+      skipped_gain += gain[levels] * query_count;
       i = e;
       continue;
     }
@@ -418,7 +427,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   for (uint32_t slot : sc.touched) {
     const uint32_t* c = bounds + 4 * static_cast<size_t>(slot);
     const uint32_t best = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
-    heap.push_back({bound_of(best, slot_features_[slot].size()), slot_id_[slot], slot});
+    heap.push_back({bound_of(best + skipped_gain, slot_features_[slot].size()), slot_id_[slot], slot});
   }
   auto lower = [](const Candidate& a, const Candidate& b) {
     if (a.bound != b.bound) return a.bound < b.bound;
@@ -427,11 +436,11 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
   stats->maps_touched = heap.size();
   std::make_heap(heap.begin(), heap.end(), lower);
   // Pass 2: exact scores, best bound first, until no bound can reach the top k.
-  TopHits top(top_k);
+  TopHits top(options.top_k);
   while (!heap.empty()) {
     const Candidate next = heap.front();
     if (top.full() && next.bound < top.kth_score()) break;
-    if (max_scored != 0 && top.full() && stats->maps_scored >= max_scored) break;
+    if (options.max_maps_scored != 0 && top.full() && stats->maps_scored >= options.max_maps_scored) break;
     std::pop_heap(heap.begin(), heap.end(), lower);
     heap.pop_back();
     ++stats->maps_scored;
@@ -442,7 +451,7 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, 
     if (top.full()) {
       const uint32_t* c = bounds + 4 * static_cast<size_t>(next.slot);
       for (int o = 0; o < 4; ++o)
-        if (bound_of(c[o], db.size()) < top.kth_score()) orientations &= ~(1u << o);
+        if (bound_of(c[o] + skipped_gain, db.size()) < top.kth_score()) orientations &= ~(1u << o);
     }
     const KernelScore s = ScoreLmdMap(q, db.data(), db.size(), &sc.kernel, orientations);
     MapHit hit;

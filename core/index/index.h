@@ -33,7 +33,11 @@
 // the exhaustive scorer, until the next bound is below the k-th best score.
 // Scores, orientations, offsets and ranks are therefore identical to
 // RetrieveExhaustive's (tests/core/index_test.cc checks it on random data),
-// unless RetrieveOptions::max_maps_scored stops pass 2 earlier.
+// unless RetrieveOptions::max_maps_scored stops pass 2 earlier or
+// RetrieveOptions::bound_skip_postings_per_map leaves the lists of the most
+// common words out of pass 1 (their most possible gain is then added to every
+// bound, so scored maps keep exact scores but a map reached only through
+// those words is no candidate).
 // The gains are tabulated per list and finest cell, so pass 1 costs one
 // table look-up and a few adds per posting. Lists are kept sorted by slot
 // and pass 1 reads them one block of slots at a time, so that the per-map
@@ -113,7 +117,7 @@ class Index {
 
  private:
   explicit Index(const IndexOptions& options);
-  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, size_t top_k, size_t max_scored,
+  std::vector<MapHit> RetrieveLmd(const PreparedLmdQuery& q, const RetrieveOptions& options,
                                   RetrieveStats* stats) const;
   std::vector<MapHit> RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
 

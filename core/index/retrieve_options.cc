@@ -30,6 +30,8 @@ Status ValidateRetrieveOptions(const RetrieveOptions& o) {
     return Status::InvalidArgument("offset_bin_m must be in (0, 100]");
   if (!(o.max_word_share > 0.0) || !(o.max_word_share <= 1.0))
     return Status::InvalidArgument("max_word_share must be in (0, 1]");
+  if (!(o.bound_skip_postings_per_map >= 0.0) || !std::isfinite(o.bound_skip_postings_per_map))
+    return Status::InvalidArgument("bound_skip_postings_per_map must be >= 0");
   if (o.method != Method::kLmd && o.method != Method::kBow)
     return Status::InvalidArgument("unknown method");
   if (o.normalization != Normalization::kNone && o.normalization != Normalization::kMin &&

@@ -63,6 +63,14 @@ struct RetrieveOptions {
   // which makes retrieval exact (index.h). A limit trades exactness for time
   // in stores that hold many maps of every place, where the bound prunes little.
   size_t max_maps_scored = 0;
+  // Inverted file only, approximate: the first pass does not read the lists
+  // of words with more than this many postings per stored map; instead every
+  // candidate's bound gets the most those words' query features could add.
+  // Such words (a straight-wall context) occur in nearly every map: their
+  // lists are most of what a query reads, yet they lift all bounds alike.
+  // Exact scoring still counts them; a map that no other query word reaches
+  // is no candidate. 0 = read every list.
+  double bound_skip_postings_per_map = 0.0;
 };
 
 // One retrieved map. db planned position ~= R(orientation * 90 deg) * query

@@ -130,6 +130,57 @@ TEST(IndexTest, MaxMapsScoredBoundsPassTwoAndScoresExactly) {
   EXPECT_GT(limited_differs, 0u) << "the limit never bit: the test checks nothing";
 }
 
+// A word on every map several times (a straight-wall word): with
+// bound_skip_postings_per_map below its postings per map, pass 1 skips its
+// lists but adds their most possible gain to every bound. A marker word once
+// per map near its origin keeps every map a candidate, so the hits must be
+// the exhaustive scorer's, while far fewer postings are read.
+TEST(IndexTest, BoundSkipLeavesCommonWordsOutOfPassOneOnly) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> pos(-4.0, 4.0);
+  constexpr uint32_t kWallWord = 7, kMarkerWord = 11;
+  constexpr int kViews = 4;
+  std::vector<Lmd> places;
+  for (int p = 0; p < 40; ++p) {
+    Lmd place = RandomLmd(rng, 40);
+    for (int i = 0; i < 30; ++i) {
+      Feature wall;
+      wall.appearance_word = kWallWord;
+      wall.x = static_cast<float>(pos(rng));
+      wall.y = static_cast<float>(pos(rng));
+      place.features.push_back(wall);
+    }
+    Feature marker;
+    marker.appearance_word = kMarkerWord;
+    place.features.push_back(marker);
+    places.push_back(place);
+  }
+  Index index = MakeIndex();
+  for (size_t p = 0; p < places.size(); ++p)
+    for (int v = 0; v < kViews; ++v)
+      ASSERT_TRUE(index.Add(p * kViews + v, TransformedCopy(places[p], 0, 0.1 * v, -0.1 * v, rng, 0.05)).ok());
+  RetrieveOptions exact;
+  exact.top_k = 10;
+  RetrieveOptions skip = exact;
+  skip.bound_skip_postings_per_map = 3.0;  // the wall word has about 24 postings per map
+  for (size_t p = 0; p < places.size(); p += 5) {
+    const Lmd query = TransformedCopy(places[p], static_cast<int>(p % 4), 0.2, 0.3, rng, 0.05);
+    RetrieveStats exact_stats, skip_stats;
+    auto all = index.Retrieve(query, exact, &exact_stats);
+    auto fewer = index.Retrieve(query, skip, &skip_stats);
+    ASSERT_TRUE(all.ok() && fewer.ok());
+    EXPECT_LT(skip_stats.postings_read * 2, exact_stats.postings_read) << "place " << p;
+    EXPECT_EQ(skip_stats.maps_touched, index.size());
+    auto exhaustive = RetrieveExhaustive(index, query, exact);
+    ASSERT_TRUE(exhaustive.ok());
+    ExpectSameHits(*fewer, *exhaustive);
+    ExpectSameHits(*all, *exhaustive);
+    EXPECT_EQ((*fewer)[0].map_id / kViews, p);
+  }
+  skip.bound_skip_postings_per_map = -1;
+  EXPECT_EQ(index.Retrieve(places[0], skip).status().code(), Status::Code::kInvalidArgument);
+}
+
 // Pass 1 reads the posting lists in blocks of slots (index.cc): a collection
 // spanning several blocks, whose freed slots are then reused out of order,
 // must still give the exhaustive scorer's hits.

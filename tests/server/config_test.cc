@@ -14,7 +14,8 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   testing::TempDir dir;
   const std::string path = dir.path() + "/lmdd.conf";
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
-                      << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n";
+                      << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n"
+                      << "bound_skip_postings_per_map = 0\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
@@ -23,6 +24,7 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   EXPECT_EQ(config.verify_enough_matches, 3u);
   EXPECT_EQ(config.prepared_map_cache_mb, 32u);
   EXPECT_EQ(config.max_maps_scored, 64u);
+  EXPECT_EQ(config.bound_skip_postings_per_map, 0.0);
 }
 
 TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
