@@ -54,6 +54,11 @@ struct MethodSpec {
   // in its log (the same robot's route: they overlap it) rank just after it,
   // lower by kNeighbourStep per position (0 = off).
   size_t neighbour_window = 0;
+  // Query expansion: the best matched hit's own descriptor is scored against
+  // every candidate too, and an unverified map ranks by the larger of the
+  // two first-stage scores (other passes of the place resemble the stored
+  // map more than the changed query). false = off.
+  bool expand_from_matched = false;
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
   // Masks whose points the verified db map explains (a db point within 0.3 m
