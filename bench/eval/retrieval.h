@@ -59,6 +59,9 @@ struct MethodSpec {
   // two first-stage scores (other passes of the place resemble the stored
   // map more than the changed query). false = off.
   bool expand_from_matched = false;
+  // With the expansion: this many unverified maps it ranks first are then
+  // verified, guessed through the best matched map's pose (0 = none).
+  size_t verify_expanded = 0;
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
   // Masks whose points the verified db map explains (a db point within 0.3 m
