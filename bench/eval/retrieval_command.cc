@@ -60,7 +60,9 @@ MethodSpec PaperMethod(const std::string& key, const std::string& label, Planner
 // and the verification depth also on intel, all with seed 1; see
 // docs/results.md). lmdd serves it with four differences, each for CPU: one
 // planner's frames, re-ranking by overlap - 2 conflicts, 10 verified hits
-// and no inner words by default (verify_candidates, inner_words).
+// and no inner words by default (verify_candidates, inner_words); and it
+// neither promotes route neighbours nor expands the query (they mostly move
+// the paper's ranks, not lmdd's top hits).
 MethodSpec BestMethod() {
   MethodSpec m;
   m.key = "best", m.label = "best", m.group = "best";
