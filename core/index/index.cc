@@ -411,6 +411,14 @@ std::vector<MapHit> Index::RetrieveLmd(const PreparedLmdQuery& q, const Retrieve
     }
     if (block_end >= slot_id_.size()) break;
   }
+  if (skipped_gain > 0 && sc.touched.size() < options.top_k) {
+    // The other words reach too few maps to fill the top k (a small store, or
+    // maps made of common words only): read every list after all.
+    for (uint32_t slot : sc.touched) std::fill_n(bounds + 4 * static_cast<size_t>(slot), 4, 0u);
+    RetrieveOptions every_list = options;
+    every_list.bound_skip_postings_per_map = 0.0;
+    return RetrieveLmd(q, every_list, stats);
+  }
   // Upper bound of each touched map's score (see index.h).
   struct Candidate {
     double bound;

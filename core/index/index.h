@@ -37,7 +37,8 @@
 // RetrieveOptions::bound_skip_postings_per_map leaves the lists of the most
 // common words out of pass 1 (their most possible gain is then added to every
 // bound, so scored maps keep exact scores but a map reached only through
-// those words is no candidate).
+// those words is no candidate, unless fewer than top_k maps are reached at
+// all: then every list is read).
 // The gains are tabulated per list and finest cell, so pass 1 costs one
 // table look-up and a few adds per posting. Lists are kept sorted by slot
 // and pass 1 reads them one block of slots at a time, so that the per-map

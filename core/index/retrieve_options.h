@@ -69,7 +69,8 @@ struct RetrieveOptions {
   // Such words (a straight-wall context) occur in nearly every map: their
   // lists are most of what a query reads, yet they lift all bounds alike.
   // Exact scoring still counts them; a map that no other query word reaches
-  // is no candidate. 0 = read every list.
+  // is no candidate. When fewer than top_k maps are reached, every list is
+  // read after all. 0 = read every list.
   double bound_skip_postings_per_map = 0.0;
 };
 

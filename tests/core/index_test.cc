@@ -181,6 +181,34 @@ TEST(IndexTest, BoundSkipLeavesCommonWordsOutOfPassOneOnly) {
   EXPECT_EQ(index.Retrieve(places[0], skip).status().code(), Status::Code::kInvalidArgument);
 }
 
+// Maps made of common words only (a small store of one square room): the
+// skip would leave no candidate, so every list is read and the hits are the
+// exhaustive scorer's.
+TEST(IndexTest, BoundSkipReadsEveryListWhenTooFewMapsRemain) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> pos(-3.0, 3.0);
+  Lmd room;
+  for (int i = 0; i < 40; ++i) {
+    Feature wall;
+    wall.appearance_word = static_cast<uint32_t>(i % 4);  // 10 postings per map for each of 4 words
+    wall.x = static_cast<float>(pos(rng));
+    wall.y = static_cast<float>(pos(rng));
+    room.features.push_back(wall);
+  }
+  Index index = MakeIndex();
+  for (uint64_t id = 0; id < 3; ++id) ASSERT_TRUE(index.Add(id, TransformedCopy(room, 0, 0.1, 0.0, rng, 0.05)).ok());
+  RetrieveOptions skip;
+  skip.top_k = 5;
+  skip.bound_skip_postings_per_map = 3.0;
+  RetrieveStats stats;
+  auto hits = index.Retrieve(room, skip, &stats);
+  auto exhaustive = RetrieveExhaustive(index, room, skip);
+  ASSERT_TRUE(hits.ok() && exhaustive.ok());
+  EXPECT_EQ(hits->size(), 3u);
+  EXPECT_EQ(stats.maps_touched, 3u);
+  ExpectSameHits(*hits, *exhaustive);
+}
+
 // Pass 1 reads the posting lists in blocks of slots (index.cc): a collection
 // spanning several blocks, whose freed slots are then reused out of order,
 // must still give the exhaustive scorer's hits.
