@@ -54,10 +54,10 @@ struct MethodSpec {
   // in its log (the same robot's route: they overlap it) rank just after it,
   // lower by kNeighbourStep per position (0 = off).
   size_t neighbour_window = 0;
-  // Query expansion: the best matched hit's own descriptor is scored against
-  // every candidate too, and an unverified map ranks by the larger of the
-  // two first-stage scores (other passes of the place resemble the stored
-  // map more than the changed query). false = off.
+  // Query expansion: the best matched hit's own descriptors score every
+  // candidate too, and an unverified map adds those scores to the query's
+  // (other passes of the place resemble the stored map more than the
+  // changed query). false = off.
   bool expand_from_matched = false;
   // With the expansion: this many unverified maps it ranks first are then
   // verified, guessed through the best matched map's pose (0 = none).

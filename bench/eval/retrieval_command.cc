@@ -357,8 +357,8 @@ struct Scored {
   Pose2 pose;             // query own frame in db own frame
   bool verified = false;
   bool matched = false;   // verified with consistency >= 0.2: shows the query's place (change masks)
-  bool expansion_guess = false;  // best_in_db is set (query expansion)
-  Pose2 best_in_db;              // the best matched map's own frame in this map's, from the expansion's kernel
+  double expansion_score = 0.0;  // query expansion: its best kernel score (0 = none)
+  Pose2 best_in_db;              // with it: the best matched map's own frame in this map's
 };
 
 struct QueryRun {
@@ -405,20 +405,17 @@ const Scored* ExpandFromBestMatch(const MethodSpec& m, const Plans& plans, const
   RetrieveOptions ro;
   ro.max_offset_m = m.max_offset_m;
   KernelScratch scratch;
-  std::vector<double> best_expansion(all->size(), 0.0);
   for (const DescSet* set : {&main, other}) {
     if (set == nullptr) continue;
     const Planner planner = set == &main ? m.planner : (m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG);
     const PreparedLmdQuery pq = PrepareLmdQuery(set->db_pf[source], kIndexOptions, ro);
-    for (size_t c = 0; c < all->size(); ++c) {
-      Scored& s = (*all)[c];
+    for (Scored& s : *all) {
       if (s.verified) continue;
       const std::vector<PoseFeature>& db = set->db_pf[s.db];
       const KernelScore k = ScoreLmdMap(pq, db.data(), db.size(), &scratch);
       s.final_score += k.score;
-      if (k.score > best_expansion[c]) {
-        best_expansion[c] = k.score;
-        s.expansion_guess = true;
+      if (k.score > s.expansion_score) {
+        s.expansion_score = k.score;
         s.best_in_db = RelativePose(plans.Db(planner, source), plans.Db(planner, s.db), k.orientation,
                                     {k.offset_x * kIndexOptions.pose_quantum_m, k.offset_y * kIndexOptions.pose_quantum_m});
       }
@@ -539,7 +536,7 @@ QueryRun RunQuery(const Dataset& d, size_t qi, const MethodSpec& m, const Plans&
         const Pose2 query_in_best = best->pose;
         std::vector<size_t> unverified;
         for (size_t c = 0; c < all.size(); ++c)
-          if (!all[c].verified && all[c].expansion_guess) unverified.push_back(c);
+          if (!all[c].verified && all[c].expansion_score > 0) unverified.push_back(c);
         const size_t k = std::min(m.verify_expanded, unverified.size());
         std::partial_sort(unverified.begin(), unverified.begin() + k, unverified.end(),
                           [&](size_t a, size_t b) { return all[a].final_score > all[b].final_score; });
