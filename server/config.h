@@ -118,7 +118,7 @@ struct ServerConfig {
   // The default method's index skips, in its first pass, the posting lists
   // of words with more than this many postings per stored map
   // (RetrieveOptions::bound_skip_postings_per_map); 0: reads every list.
-  // On the fleet's demo world four words hold about a third of all postings
+  // On the fleet's demo world ten words hold about a third of all postings
   // and most of what a query reads. lmd-bench load at 150 robots for 30 s
   // read 70k instead of 106k postings per query at the end (4.7k maps),
   // with place_at_1 0.953 both; 2 read 50k but lost place_at_1 (0.940), 1
