@@ -54,14 +54,20 @@ struct MethodSpec {
   // in its log (the same robot's route: they overlap it) rank just after it,
   // lower by kNeighbourStep per position (0 = off).
   size_t neighbour_window = 0;
+  // Route neighbours also lift verified maps that did not match (false:
+  // unverified maps only).
+  bool lift_unmatched_neighbours = false;
   // Query expansion: the best matched hit's own descriptors score every
-  // candidate too, and an unverified map adds those scores to the query's
-  // (other passes of the place resemble the stored map more than the
-  // changed query). false = off.
+  // candidate that did not match, and an unverified map adds those scores
+  // to the query's (other passes of the place resemble the stored map more
+  // than the changed query). false = off.
   bool expand_from_matched = false;
   // With the expansion: this many unverified maps it ranks first are then
   // verified, guessed through the best matched map's pose (0 = none).
   size_t verify_expanded = 0;
+  // Those maps may also be verified maps that did not match (their first
+  // guess was poor); each keeps the better of its two alignments.
+  bool reverify_unmatched = false;
   // Change detection evaluated on this method's hits.
   bool change_eval = false;
   // Masks whose points the verified db map explains (a db point within 0.3 m
