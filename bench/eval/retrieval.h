@@ -57,6 +57,10 @@ struct MethodSpec {
   // Route neighbours also lift verified maps that did not match (false:
   // unverified maps only).
   bool lift_unmatched_neighbours = false;
+  // Runs of matched maps that are consecutive in their log are ordered
+  // among themselves by aligned mean distance (the relevant map's
+  // criterion) instead of the re-ranking key.
+  bool order_runs_by_distance = false;
   // Query expansion: the best matched hit's own descriptors score every
   // candidate that did not match, and an unverified map adds those scores
   // to the query's (other passes of the place resemble the stored map more
