@@ -456,8 +456,9 @@ void PromoteNeighbours(size_t window, bool lift_unmatched, std::vector<Scored>* 
 
 // Query expansion (MethodSpec::expand_from_matched): the best matched map's
 // descriptors (both planners' when the method has both), as queries, score
-// every candidate that did not match; an unverified map adds those scores to
-// its own. Returns the best matched map (null if none).
+// every unverified candidate (and, with reverify_unmatched, every verified
+// one that did not match); an unverified map adds those scores to its own.
+// Returns the best matched map (null if none).
 const Scored* ExpandFromBestMatch(const MethodSpec& m, const Plans& plans, const DescSet& main, const DescSet* other,
                                   std::vector<Scored>* all) {
   const Scored* best = nullptr;
@@ -473,7 +474,7 @@ const Scored* ExpandFromBestMatch(const MethodSpec& m, const Plans& plans, const
     const Planner planner = set == &main ? m.planner : (m.planner == Planner::kCoG ? Planner::kCoR : Planner::kCoG);
     const PreparedLmdQuery pq = PrepareLmdQuery(set->db_pf[source], kIndexOptions, ro);
     for (Scored& s : *all) {
-      if (s.matched) continue;
+      if (s.matched || (s.verified && !m.reverify_unmatched)) continue;  // only what may still move
       const std::vector<PoseFeature>& db = set->db_pf[s.db];
       const KernelScore k = ScoreLmdMap(pq, db.data(), db.size(), &scratch);
       if (set == &main) s.expanded_score = s.score;
