@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <shared_mutex>
 #include <unordered_map>
 
@@ -23,7 +24,7 @@ namespace lmd::server {
 struct CollectionState {
   explicit CollectionState(const IndexOptions& options) : index(Index::Create(options).value()) {}
 
-  internal::CollectionRecord record;  // guarded by MapStore::mutex_
+  internal::CollectionRecord record;  // guarded by MapStore::collections_mutex_
 
   mutable std::shared_mutex index_mutex;
   // Guarded by index_mutex (shared: queries; exclusive: applying a write).
@@ -236,13 +237,32 @@ Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
 }
 
 Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collections) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(write_mutex_);
   // Counters change on copies, published only once the batch is written.
   std::map<std::string, internal::CollectionRecord> records;
   std::map<std::string, IndexChange> changes;
   std::map<std::string, std::pair<uint64_t, const MapWrite*>> written;  // key -> (index id, map) in this batch
   rocksdb::WriteBatch batch;
   size_t new_collections = 0;
+  // Keys the batch names itself: an assigned id never takes one of them, nor
+  // a stored map's, so that it cannot replace a map its client named.
+  std::set<std::string> named;
+  for (const MapWrite& write : *maps) {
+    const v1::MapMetadata& meta = write.map.metadata();
+    if (!meta.map_id().empty()) named.insert(MapKey(meta.collection(), meta.map_id()));
+  }
+  auto free_auto_id = [&](const std::string& collection, internal::CollectionRecord* record) -> Result<std::string> {
+    for (;;) {
+      const std::string id = AutoMapId(record->next_auto_id());
+      record->set_next_auto_id(record->next_auto_id() + 1);
+      const std::string key = MapKey(collection, id);
+      if (named.count(key) != 0 || written.count(key) != 0) continue;
+      Result<v1::MapMetadata> stored = ReadMetadata(key);
+      if (stored.ok()) continue;
+      if (stored.status().code() != Status::Code::kNotFound) return stored.status();
+      return id;
+    }
+  };
 
   // Deletes a stored or earlier-in-batch map's postings and uncounts it.
   auto remove_old = [&](const std::string& collection, const std::string& key,
@@ -287,8 +307,13 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
       record_it = records.emplace(collection, state ? state->record : internal::CollectionRecord()).first;
     }
     internal::CollectionRecord& record = record_it->second;
-    if (meta->map_id().empty()) meta->set_map_id(AutoMapId(record.next_auto_id()));
-    record.set_next_auto_id(record.next_auto_id() + 1);
+    if (meta->map_id().empty()) {
+      Result<std::string> id = free_auto_id(collection, &record);
+      if (!id.ok()) return id.status();
+      meta->set_map_id(*id);
+    } else {
+      record.set_next_auto_id(record.next_auto_id() + 1);
+    }
     meta->set_point_count(static_cast<uint32_t>(write.map.map().x_size()));
     const std::string key = MapKey(collection, meta->map_id());
 
@@ -317,6 +342,14 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
     return Status::ResourceExhausted("max_collections (" + std::to_string(max_collections) +
                                      ") reached: cannot create another collection");
   }
+  // Checked before the write, so that publishing below cannot fail.
+  for (const auto& [name, record] : records) {
+    if (record.maps() > Index::kMaxMaps) {
+      return Status::ResourceExhausted("collection '" + name + "' would hold " + std::to_string(record.maps()) +
+                                       " maps; one collection's index holds at most " +
+                                       std::to_string(Index::kMaxMaps));
+    }
+  }
   for (const auto& [name, record] : records) batch.Put(collections_cf_, name, record.SerializeAsString());
   rocksdb::WriteOptions write_options;
   write_options.sync = sync_writes_;
@@ -325,9 +358,14 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
 
   // Durable: now publish counters and index changes.
   for (auto& [name, record] : records) {
-    auto& state = collections_[name];
-    if (!state) state = std::make_unique<CollectionState>(indexing_.index);
-    state->record = record;
+    CollectionState* state = nullptr;
+    {
+      std::unique_lock<std::shared_mutex> collections_lock(collections_mutex_);
+      auto& owned = collections_[name];
+      if (!owned) owned = std::make_unique<CollectionState>(indexing_.index);
+      owned->record = record;
+      state = owned.get();
+    }
     const IndexChange& change = changes[name];
     std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
     for (uint64_t id : change.removed) {
@@ -373,7 +411,7 @@ Result<Lmd> MapStore::GetDescriptor(const std::string& collection, const std::st
 }
 
 Status MapStore::DeleteMap(const std::string& collection, const std::string& map_id) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(write_mutex_);
   CollectionState* state = FindCollection(collection);
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
   const std::string key = MapKey(collection, map_id);
@@ -403,7 +441,10 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   write_options.sync = sync_writes_;
   Status status = FromRocks(db_->Write(write_options, &batch), "deleting map " + map_id);
   if (!status.ok()) return status;
-  state->record = record;
+  {
+    std::unique_lock<std::shared_mutex> collections_lock(collections_mutex_);
+    state->record = record;
+  }
   std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
   state->index.Remove(indexed->index_id());
   state->map_ids.erase(indexed->index_id());
@@ -437,7 +478,7 @@ Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, 
                                                  const RetrieveOptions& options, RetrieveStats* stats) const {
   const CollectionState* state = nullptr;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
     state = FindCollection(collection);
   }
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
@@ -469,14 +510,14 @@ Result<uint64_t> MapStore::Backup(const std::string& directory) const {
 }
 
 std::vector<v1::CollectionInfo> MapStore::ListCollections() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::shared_lock<std::shared_mutex> lock(collections_mutex_);
   std::vector<v1::CollectionInfo> infos;
   for (const auto& [name, state] : collections_) infos.push_back(ToInfo(name, state->record));
   return infos;
 }
 
 bool MapStore::HasCollection(const std::string& collection) const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::shared_lock<std::shared_mutex> lock(collections_mutex_);
   return FindCollection(collection) != nullptr;
 }
 

@@ -14,16 +14,20 @@
 // At open the indexes are rebuilt from the descriptors and checked against
 // the counters; a mismatch is reported, never repaired by deleting data.
 //
-// Concurrency: writers are serialised by mutex_ (RocksDB serialises its WAL
-// anyway); each collection's index has a readers-writer lock, so queries run
-// concurrently with each other and wait only for the short in-memory part of
-// a write (adding postings), never for RocksDB I/O.
+// Concurrency: writers are serialised by write_mutex_ (RocksDB serialises
+// its WAL anyway), held through their RocksDB reads and write. Readers never
+// take it: the collection table has its own readers-writer lock, which a
+// writer holds exclusively only to publish counters, and each collection's
+// index has one, which a writer holds only to add or remove postings. So
+// queries run concurrently with each other and wait only for those short
+// in-memory steps, never for RocksDB I/O (nor an fsync with sync_writes).
 #pragma once
 
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -126,7 +130,8 @@ class MapStore {
   Status LoadCollections();
   Status RebuildIndexes();
   // The state of a collection, or nullptr. States are never removed, so the
-  // pointer stays valid while the store is open.
+  // pointer stays valid while the store is open. The caller holds
+  // collections_mutex_ (shared) or write_mutex_.
   CollectionState* FindCollection(const std::string& collection) const;
   Result<internal::IndexedMap> ReadIndexed(const std::string& key) const;
   Result<v1::MapMetadata> ReadMetadata(const std::string& key) const;
@@ -141,9 +146,13 @@ class MapStore {
   bool sync_writes_ = false;
   IndexingConfig indexing_;
 
-  // Serialises writers; also guards the map below (not the states' indexes,
-  // which have their own locks) and every CollectionState::record.
-  mutable std::mutex mutex_;
+  // Serialises writers (InsertMaps, DeleteMap).
+  std::mutex write_mutex_;
+  // Guards the map below and every CollectionState::record (not the states'
+  // indexes, which have their own locks): shared to read; exclusive to
+  // change, which only a writer holding write_mutex_ does, so a writer may
+  // read them without it.
+  mutable std::shared_mutex collections_mutex_;
   std::map<std::string, std::unique_ptr<CollectionState>> collections_;
 };
 

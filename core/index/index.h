@@ -74,6 +74,9 @@ struct RetrieveStats {
 
 class Index {
  public:
+  // The most maps one index holds (a posting's slot has 24 bits).
+  static constexpr uint32_t kMaxMaps = (1u << 24) - 1;
+
   // InvalidArgument if the options are invalid (retrieve_options.h).
   static Result<Index> Create(const IndexOptions& options = {});
 
@@ -122,7 +125,6 @@ class Index {
                                   RetrieveStats* stats) const;
   std::vector<MapHit> RetrieveBow(const PreparedLmdQuery& q, size_t top_k, RetrieveStats* stats) const;
 
-  static constexpr uint32_t kMaxMaps = (1u << 24) - 1;  // slots fit 24 bits
   struct Posting {
     uint32_t packed;  // slot << 8 | finest cell index (sx * 2^L + sy)
     uint32_t slot() const { return packed >> 8; }

@@ -44,6 +44,30 @@ TEST_F(MapServiceTest, ServerAssignsIncreasingIdsWhenNoneGiven) {
   EXPECT_LT(inserted.maps(0).map_id(), inserted.maps(1).map_id());
 }
 
+TEST_F(MapServiceTest, AnAssignedIdNeverReplacesAMapItsClientNamed) {
+  TestServer server(dir_.path());
+  v1::InsertMapsResponse inserted;
+  // A client picks the id lmdd would assign first, then sends a map without id.
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "m000000000001", SquareRoomMap(12)), &inserted).ok());
+  v1::InsertMapsRequest unnamed = OneMapRequest("site", "", SquareRoomMap(16));
+  // ... and in one batch, an unnamed map before a named one that takes the next id.
+  *unnamed.add_maps() = OneMapRequest("site", "m000000000003", SquareRoomMap(20)).maps(0);
+  ASSERT_TRUE(server.client().InsertMaps(unnamed, &inserted).ok());
+  ASSERT_EQ(inserted.maps_size(), 2);
+  EXPECT_NE(inserted.maps(0).map_id(), "m000000000001");
+  EXPECT_NE(inserted.maps(0).map_id(), "m000000000003");
+  v1::ListMapsRequest list;
+  list.set_collection("site");
+  v1::ListMapsResponse listed;
+  ASSERT_TRUE(server.client().ListMaps(list, &listed).ok());
+  ASSERT_EQ(listed.maps_size(), 3);
+  for (const auto& meta : listed.maps()) {
+    if (meta.map_id() == "m000000000001") {
+      EXPECT_EQ(meta.point_count(), 12u);
+    }
+  }
+}
+
 TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
   {
     TestServer server(dir_.path());
