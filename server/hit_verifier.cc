@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "core/align/relative_pose.h"
+#include "server/indexing.h"
 #include "proto/convert.h"
 
 namespace lmd::server {
@@ -72,7 +73,7 @@ Result<std::shared_ptr<const PreparedMap>> HitVerifier::Prepared(const std::stri
   if (query_maps_kept_) {  // hashing the stored map costs about 5 % of preparing it
     prepared = Take(ContentKey(DescriptorCache::KeyOf(stored->map().SerializeAsString()), heading));
   }
-  if (!prepared) prepared = Prepare(FromProto(stored->map()), heading);
+  if (!prepared) prepared = Prepare(MethodView(FromProto(stored->map())), heading);
   Put(key, prepared);
   return prepared;
 }
@@ -81,7 +82,8 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
                                                           const DescriptorCache::Key& query_key, const Lmd& query_lmd,
                                                           const std::vector<StoreHit>& hits,
                                                           size_t candidates, size_t enough_matches,
-                                                          double reverse_conflict_weight) {
+                                                          double reverse_conflict_weight,
+                                                          const std::function<bool()>& cancelled) {
   candidates = std::min(candidates, hits.size());
   std::vector<HitCandidate> inputs;
   for (size_t i = 0; i < candidates; ++i) {
@@ -111,6 +113,7 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
   options.match.quarter_turns = false;
   options.enough_matches = enough_matches;
   options.reverse_conflict_weight = reverse_conflict_weight;
+  options.stop = cancelled;
   const PreparedQuery prepared_query = PrepareQuery(query, options.match, query_lmd.frame.heading);
   // The query's own free space, for reverse conflicts (one db map's preparation).
   std::shared_ptr<const PreparedMap> query_map;
@@ -126,7 +129,9 @@ Result<std::vector<VerifiedStoreHit>> HitVerifier::Verify(const std::string& col
       query_maps_kept_ = true;
     }
   }
-  for (VerifiedHit& verified : VerifyHits(prepared_query, inputs, options, query_map.get())) {
+  std::vector<VerifiedHit> verified_hits = VerifyHits(prepared_query, inputs, options, query_map.get());
+  if (cancelled && cancelled()) return Status::Cancelled("call cancelled during verification");
+  for (VerifiedHit& verified : verified_hits) {
     VerifiedStoreHit hit;
     hit.hit = hits[verified.map_id];
     hit.verified = verified.verified && verified.score > 0;

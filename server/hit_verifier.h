@@ -12,6 +12,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -47,12 +48,14 @@ class HitVerifier {
   // returns every hit re-ranked: verified ones by verification score, the
   // rest after them in retrieval order. `query_lmd` supplies the planned
   // frame for the index's pose guesses; `query_key` is the query's content
-  // key (DescriptorCache::KeyOf of its wire bytes).
+  // key (DescriptorCache::KeyOf of its wire bytes). Once `cancelled`
+  // returns true, no further hit is matched and the result is Cancelled.
   Result<std::vector<VerifiedStoreHit>> Verify(const std::string& collection, const LocalMap& query,
                                                const DescriptorCache::Key& query_key, const Lmd& query_lmd,
                                                const std::vector<StoreHit>& hits,
                                                size_t candidates, size_t enough_matches,
-                                               double reverse_conflict_weight);
+                                               double reverse_conflict_weight,
+                                               const std::function<bool()>& cancelled);
 
   // How many maps this verifier has prepared (PrepareMap calls), queries included.
   size_t maps_prepared() const { return maps_prepared_; }

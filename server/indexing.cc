@@ -2,10 +2,17 @@
 
 #include <sstream>
 
+#include "core/localmap/local_map_builder.h"
+
 namespace lmd::server {
 
 Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config) {
   return Describe(map, PlanViewpoint(map, config.viewpoint), config.describer);
+}
+
+LocalMap MethodView(LocalMap map) {
+  map.points = DeduplicatePoints(map.points, LocalMapOptions().dedup_cell_m);
+  return map;
 }
 
 IndexingConfig ProductIndexing(bool inner_words) {

@@ -26,6 +26,12 @@ IndexingConfig ProductIndexing(bool inner_words);
 // The planned frame and descriptor of `map` (in its own frame).
 Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config);
 
+// `map` as lmdd's method sees it: its points deduplicated on the local-map
+// grid (0.1 m), as lmd builds its own maps. A client's raw, dense or repeated
+// points then cost what one of lmd's maps does (200k copies of one point
+// made a scan match run for minutes); lmd-built maps are unchanged.
+LocalMap MethodView(LocalMap map);
+
 // One line naming every setting that changes stored descriptors or postings.
 std::string Fingerprint(const IndexingConfig& config);
 

@@ -65,10 +65,11 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
     std::vector<VerifiedStoreHit> hits;  // ranked; verified ones carry the scan-matched pose
   };
   // Maps whose id is in `exclude` are left out of the hits; `verify_candidates`
-  // is the request's (0: the server's).
+  // is the request's (0: the server's). Cancelled once `context` is (checked
+  // between scan matches).
   Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
                          v1::Method method, const google::protobuf::RepeatedPtrField<std::string>& exclude,
-                         uint32_t verify_candidates) const;
+                         uint32_t verify_candidates, grpc::CallbackServerContext* context) const;
   // The wire form of a hit (metadata, and the pose when the method gives one).
   Result<v1::MapHit> ToWireHit(const std::string& collection, const Query& query, const VerifiedStoreHit& hit,
                                size_t rank, const Lmd* db, v1::Method method) const;

@@ -57,7 +57,8 @@ void AlignFromPose(const Frame& query_frame, const Frame& db_frame, const Pose2&
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     const std::string& collection, const v1::LocalMap& map, uint32_t top_k, v1::Method method,
-    const google::protobuf::RepeatedPtrField<std::string>& exclude, uint32_t verify_candidates) const {
+    const google::protobuf::RepeatedPtrField<std::string>& exclude, uint32_t verify_candidates,
+    grpc::CallbackServerContext* context) const {
   Status valid = ValidateCollectionName(collection);
   if (valid.ok()) valid = ValidateLocalMap(map, config_, "query map");
   if (!valid.ok()) return valid;
@@ -79,7 +80,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
 
   Query query;
-  query.map = FromProto(map);
+  query.map = MethodView(FromProto(map));
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
   query.lmd = Describe(map, key);
   RetrieveOptions options;
@@ -108,7 +109,8 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   if (verify) {
     Result<std::vector<VerifiedStoreHit>> verified =
         verifier_.Verify(collection, query.map, key, query.lmd, *hits, verify_depth,
-                         config_.verify_enough_matches, config_.reverse_conflict_weight);
+                         config_.verify_enough_matches, config_.reverse_conflict_weight,
+                         [context] { return context->IsCancelled(); });
     if (!verified.ok()) return verified.status();
     query.hits = std::move(verified).value();
   } else {
@@ -149,7 +151,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
   return runner_->Unary(context, "Retrieve", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids(), request->verify_candidates());
+                                   request->exclude_map_ids(), request->verify_candidates(), context);
     if (!query.ok()) return query.status();
     for (size_t rank = 0; rank < query->hits.size(); ++rank) {
       if (context->IsCancelled()) return Status::Cancelled("call cancelled");
@@ -169,9 +171,11 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
                                                         v1::DetectChangesResponse* response) {
   return runner_->Unary(context, "DetectChanges", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
-    if (!(request->threshold() >= 0)) return Status::InvalidArgument("threshold must be >= 0 (0: the default)");
+    if (!(request->threshold() >= 0) || !std::isfinite(request->threshold())) {
+      return Status::InvalidArgument("threshold must be a finite number >= 0 (0: the default)");
+    }
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids(), request->verify_candidates());
+                                   request->exclude_map_ids(), request->verify_candidates(), context);
     if (!query.ok()) return query.status();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
 

@@ -24,13 +24,15 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
   const size_t n_verify = options.max_candidates ? std::min(options.max_candidates, candidates.size())
                                                  : candidates.size();
   size_t matches = 0;  // candidates that reached matched_score near their guesses
+  bool stopped = false;
+  auto stop = [&] { return stopped || (stopped = options.stop && options.stop()); };
   for (size_t i = 0; i < candidates.size(); ++i) {
     const HitCandidate& c = candidates[i];
     VerifiedHit h;
     h.map_id = c.map_id;
     h.retrieval_score = c.retrieval_score;
     h.retrieval_rank = i;
-    h.verified = i < n_verify && (options.enough_matches == 0 || matches < options.enough_matches);
+    h.verified = i < n_verify && (options.enough_matches == 0 || matches < options.enough_matches) && !stop();
     if (h.verified) h.db = c.db ? c.db : c.prepare ? c.prepare() : nullptr;
     if (h.verified && !c.guesses.empty()) {
       h.match.pose = c.guesses[0];
@@ -48,6 +50,7 @@ std::vector<VerifiedHit> VerifyHits(const PreparedQuery& query, const std::vecto
       const HitCandidate& c = candidates[i];
       VerifiedHit& h = hits[i];
       if (!h.db || (!c.guesses.empty() && h.score >= options.global_below_score)) continue;
+      if (stop()) break;
       const ScanMatch global = MatchLocalMapsGlobal(query, *h.db, options.match);
       const double global_reverse = reverse_conflicts(global, *h.db);
       if (c.guesses.empty() || score_of(global, global_reverse) > h.score) {

@@ -62,6 +62,10 @@ struct VerifyOptions {
   double reverse_conflict_weight = 0.0;
   size_t max_candidates = 0;         // verify only the first N candidates (0 = all); the rest follow unverified
   size_t enough_matches = 0;         // stop verifying once N candidates reached matched_score (0 = never)
+  // Asked before each scan match; once it returns true, no further candidate
+  // is matched (they count as not verified), e.g. when the caller's request
+  // was cancelled. Empty = never.
+  std::function<bool()> stop;
 };
 
 struct VerifiedHit {

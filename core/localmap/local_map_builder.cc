@@ -18,6 +18,17 @@ std::vector<double> CumulativeTravel(const LaserLog& log) {
   return travel;
 }
 
+std::vector<Point2> DeduplicatePoints(const std::vector<Point2>& points, double dedup_cell_m) {
+  CellSet seen;
+  seen.Reset(points.size());
+  std::vector<Point2> kept;
+  kept.reserve(points.size());
+  for (const Point2& p : points) {
+    if (seen.Insert(CellKeyOf(p.x, p.y, dedup_cell_m))) kept.push_back(p);
+  }
+  return kept;
+}
+
 std::vector<Point2> PointsFromScans(const std::vector<Scan>& scans, double dedup_cell_m) {
   size_t beams = 0;
   for (const Scan& s : scans) beams += s.ranges.size();

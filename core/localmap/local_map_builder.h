@@ -34,6 +34,10 @@ std::vector<LocalMap> BuildLocalMaps(const LaserLog& log, const LocalMapOptions&
 // frame, one per dedup_cell_m cell (the first one met, in scan/beam order).
 std::vector<Point2> PointsFromScans(const std::vector<Scan>& scans, double dedup_cell_m = 0.1);
 
+// `points` with one kept per dedup_cell_m cell (the first met, order kept),
+// as BuildLocalMaps keeps them; points of maps it built all stay.
+std::vector<Point2> DeduplicatePoints(const std::vector<Point2>& points, double dedup_cell_m = 0.1);
+
 // Cumulative travel (m) at each scan of the log: 0 at the first scan.
 std::vector<double> CumulativeTravel(const LaserLog& log);
 

@@ -91,6 +91,19 @@ TEST(LocalMapBuilder, PointsAreDeduplicatedOnTheGridAndNoReturnGivesNone) {
   EXPECT_LE(maps[0].points.size(), 106u);
 }
 
+TEST(LocalMapBuilder, DeduplicatePointsKeepsTheFirstPointOfEachCellInOrder) {
+  const std::vector<Point2> points = {{0.01, 0.01}, {0.05, 0.02}, {0.15, 0.0}, {0.01, 0.01}, {-0.05, 0.0}, {0.12, 0.09}};
+  const std::vector<Point2> kept = DeduplicatePoints(points, 0.1);
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_EQ(kept[0].x, 0.01);
+  EXPECT_EQ(kept[1].x, 0.15);
+  EXPECT_EQ(kept[2].x, -0.05);
+  // The points of a map BuildLocalMaps made all stay.
+  const auto maps = BuildLocalMaps(StraightLog(6.0, 0.001, 0.0));
+  ASSERT_FALSE(maps.empty());
+  EXPECT_EQ(DeduplicatePoints(maps[0].points).size(), maps[0].points.size());
+}
+
 TEST(LocalMapBuilder, GapsInTheLogDoNotDuplicateMaps) {
   LaserLog log = StraightLog(10.0, 0.5);
   LaserLog jump = StraightLog(10.0, 0.5);

@@ -50,7 +50,7 @@ class HitVerifierTest : public ::testing::Test {
   std::map<std::string, std::shared_ptr<const PreparedMap>> Verify(HitVerifier* verifier,
                                                                    double reverse_conflict_weight = 0.0) {
     Result<std::vector<VerifiedStoreHit>> verified =
-        verifier->Verify("c", query_, query_key_, query_lmd_, hits_, 2, 0, reverse_conflict_weight);
+        verifier->Verify("c", query_, query_key_, query_lmd_, hits_, 2, 0, reverse_conflict_weight, {});
     EXPECT_TRUE(verified.ok());
     std::map<std::string, std::shared_ptr<const PreparedMap>> out;
     for (const VerifiedStoreHit& hit : *verified) {
@@ -102,6 +102,16 @@ TEST_F(HitVerifierTest, AQueryPreparedForReverseConflictsIsReusedForAStoredMapOf
   HitVerifier no_reverse(store_.get(), size_t{64} << 20);
   Verify(&no_reverse);
   EXPECT_EQ(no_reverse.maps_prepared(), 2u);  // no query preparation
+}
+
+TEST_F(HitVerifierTest, ACancelledCallStopsBeforeTheNextScanMatch) {
+  HitVerifier verifier(store_.get(), size_t{64} << 20);
+  int asked = 0;
+  // Cancelled after the first hit's match: the second is never prepared.
+  Result<std::vector<VerifiedStoreHit>> verified =
+      verifier.Verify("c", query_, query_key_, query_lmd_, hits_, 2, 0, 0.0, [&asked] { return ++asked > 1; });
+  EXPECT_EQ(verified.status().code(), Status::Code::kCancelled);
+  EXPECT_EQ(verifier.maps_prepared(), 1u);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // Retrieve and DetectChanges over gRPC: real results on stored maps, and the
 // right status for bad queries.
+#include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -137,6 +139,43 @@ TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
   status = server_->client().Retrieve(other, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
+}
+
+TEST_F(RetrievalServiceTest, AnInfiniteThresholdIsRejected) {
+  v1::DetectChangesRequest request;
+  request.set_collection("site");
+  *request.mutable_map() = CornerMap(0, 0);
+  request.set_threshold(std::numeric_limits<double>::infinity());
+  v1::DetectChangesResponse response;
+  const grpc::Status status = server_->client().DetectChanges(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("finite"), std::string::npos) << status.error_message();
+}
+
+// A room's 200 points and 100k copies of one of them: the method sees the 200
+// (as lmd builds its maps), so a scan match costs what any does. Before, the
+// copies made every nearest-point search scan them all (minutes per call).
+TEST_F(RetrievalServiceTest, AMapOfRepeatedPointsIsAnsweredLikeItsDistinctPoints) {
+  v1::LocalMap dense = SquareRoomMap(200);
+  for (int copy = 0; copy < 100000; ++copy) {
+    dense.add_x(dense.x(0));
+    dense.add_y(dense.y(0));
+  }
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("site", "dense", dense), &inserted).ok());
+  EXPECT_EQ(inserted.maps(0).point_count(), 100200u);  // stored as sent
+  client::ClientOptions options;
+  options.target = server_->address();
+  options.deadline = std::chrono::seconds(10);  // generous: the call takes a fraction of a second
+  auto client = std::move(client::LmdClient::Create(options)).value();
+  v1::DetectChangesRequest request;
+  request.set_collection("site");
+  *request.mutable_map() = dense;
+  v1::DetectChangesResponse response;
+  const grpc::Status status = client->DetectChanges(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_GT(response.hits_size(), 0);
+  EXPECT_TRUE(response.hits(0).hit().verified());
 }
 
 TEST_F(RetrievalServiceTest, ExcludedMapsAreNeverReturned) {
