@@ -1,11 +1,16 @@
 #include "client/lmd_client.h"
 
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <thread>
 
 #include <grpcpp/create_channel.h>
 #include <grpcpp/security/credentials.h>
+
+#include "proto/metadata_keys.h"
 
 namespace lmd::client {
 namespace {
@@ -35,6 +40,21 @@ Result<std::shared_ptr<grpc::ChannelCredentials>> MakeCredentials(const ClientOp
   return grpc::SslCredentials(ssl);
 }
 
+// Whether a failed call is worth repeating: lmdd (or the way to it) was
+// unavailable, or lmdd's queue was full.
+bool Retryable(const grpc::Status& status, const grpc::ClientContext& context) {
+  if (status.error_code() == grpc::StatusCode::UNAVAILABLE) return true;
+  if (status.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) return false;
+  return context.GetServerTrailingMetadata().count(kBusyMetadata) != 0;
+}
+
+// `backoff` scaled by a random factor in [0.5, 1.5).
+std::chrono::milliseconds Jittered(std::chrono::milliseconds backoff) {
+  thread_local std::mt19937 random(std::random_device{}());
+  std::uniform_real_distribution<double> factor(0.5, 1.5);
+  return std::chrono::milliseconds(static_cast<long>(static_cast<double>(backoff.count()) * factor(random)));
+}
+
 }  // namespace
 
 Result<std::unique_ptr<LmdClient>> LmdClient::Create(const ClientOptions& options) {
@@ -54,29 +74,36 @@ std::unique_ptr<grpc::ClientContext> LmdClient::NewContext(const std::string& co
   auto context = std::make_unique<grpc::ClientContext>();
   context->set_deadline(deadline);
   if (!options_.token.empty()) context->AddMetadata("authorization", "Bearer " + options_.token);
-  if (!collection.empty()) context->AddMetadata("x-lmd-collection", collection);
+  if (!collection.empty()) context->AddMetadata(kCollectionMetadata, collection);
   return context;
 }
 
 grpc::Status LmdClient::WithRetries(const std::string& collection,
-                                    const std::function<grpc::Status(grpc::ClientContext*)>& call) const {
+                                    const std::function<grpc::Status(grpc::ClientContext*)>& call, bool retry,
+                                    int* attempts) const {
   const auto deadline = std::chrono::system_clock::now() + options_.deadline;
   auto backoff = options_.initial_backoff;
   for (int attempt = 1;; ++attempt) {
+    if (attempts != nullptr) *attempts = attempt;
     auto context = NewContext(collection, deadline);
     const grpc::Status status = call(context.get());
-    if (status.error_code() != grpc::StatusCode::UNAVAILABLE || attempt >= options_.max_attempts ||
-        std::chrono::system_clock::now() + backoff >= deadline) {
+    const auto wait = Jittered(backoff);
+    if (!retry || !Retryable(status, *context) || attempt >= options_.max_attempts ||
+        std::chrono::system_clock::now() + wait >= deadline) {
       return status;
     }
-    std::this_thread::sleep_for(backoff);
+    std::this_thread::sleep_for(wait);
     backoff = std::min<std::chrono::milliseconds>(backoff * 2, std::chrono::seconds(2));
   }
 }
 
 grpc::Status LmdClient::InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const {
   const std::string collection = request.maps_size() > 0 ? request.maps(0).metadata().collection() : "";
-  return WithRetries(collection, [&](grpc::ClientContext* c) { return stub_->InsertMaps(c, request, response); });
+  // A retry of maps lmdd names itself could store them twice.
+  const bool every_id_given = std::all_of(request.maps().begin(), request.maps().end(),
+                                          [](const v1::InsertMapRequest& m) { return !m.metadata().map_id().empty(); });
+  return WithRetries(
+      collection, [&](grpc::ClientContext* c) { return stub_->InsertMaps(c, request, response); }, every_id_given);
 }
 
 grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
@@ -88,7 +115,17 @@ grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>
     if (!writer->Write(request)) break;  // the server ended the stream; Finish says why
   }
   writer->WritesDone();
-  return writer->Finish();
+  const grpc::Status status = writer->Finish();
+  if (!status.ok()) {
+    response->clear_maps();
+    const auto& trailers = context->GetServerTrailingMetadata();
+    const auto stored = trailers.find(kStoredMapsMetadata);
+    const size_t count = stored == trailers.end()
+                             ? 0
+                             : std::strtoul(std::string(stored->second.data(), stored->second.size()).c_str(), nullptr, 10);
+    for (size_t i = 0; i < std::min(count, requests.size()); ++i) *response->add_maps() = requests[i].metadata();
+  }
+  return status;
 }
 
 grpc::Status LmdClient::GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const {
@@ -97,8 +134,13 @@ grpc::Status LmdClient::GetMap(const v1::GetMapRequest& request, v1::GetMapRespo
 
 grpc::Status LmdClient::DeleteMap(const v1::DeleteMapRequest& request) const {
   v1::DeleteMapResponse response;
-  return WithRetries(request.collection(),
-                     [&](grpc::ClientContext* c) { return stub_->DeleteMap(c, request, &response); });
+  int attempts = 0;
+  const grpc::Status status = WithRetries(
+      request.collection(), [&](grpc::ClientContext* c) { return stub_->DeleteMap(c, request, &response); }, true,
+      &attempts);
+  // A retry that finds the map gone: an earlier attempt deleted it.
+  if (status.error_code() == grpc::StatusCode::NOT_FOUND && attempts > 1) return grpc::Status::OK;
+  return status;
 }
 
 grpc::Status LmdClient::ListMaps(const v1::ListMapsRequest& request, v1::ListMapsResponse* response) const {
@@ -128,7 +170,9 @@ grpc::Status LmdClient::Stats(const v1::StatsRequest& request, v1::StatsResponse
 }
 
 grpc::Status LmdClient::Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const {
-  return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Backup(c, request, response); });
+  // Not retried: a lost answer would make the retry fail on the directory
+  // the first attempt created.
+  return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Backup(c, request, response); }, false);
 }
 
 }  // namespace lmd::client

@@ -11,10 +11,15 @@
 // Every call is synchronous and carries the options' deadline, the bearer
 // token, and the "x-lmd-collection" header (so a proxy can route the call to
 // the shard that holds the collection). A call that fails with UNAVAILABLE
-// (lmdd restarting, a shard moving) is retried with exponential backoff up to
-// max_attempts times within the deadline; other errors return at once. Give
-// maps explicit ids when inserting: a retried insert then replaces the same
-// map instead of adding a second copy. The returned status is lmdd's: OK,
+// (lmdd restarting, a shard moving), or that lmdd refused because its queue
+// was full (RESOURCE_EXHAUSTED with the "lmd-busy" trailer), is retried with
+// exponential backoff and random jitter (so that a fleet does not retry in
+// step) up to max_attempts times within the deadline; other errors return at
+// once. Only calls that are safe to repeat are retried: an insert only when
+// every map has an explicit id (a retry then replaces the same map instead of
+// adding a second copy), a backup never; a retried delete that finds the map
+// gone reports success (an earlier attempt deleted it and its answer was
+// lost). The returned status is lmdd's: OK,
 // INVALID_ARGUMENT with a message saying what is wrong, NOT_FOUND,
 // RESOURCE_EXHAUSTED, UNAUTHENTICATED, PERMISSION_DENIED, UNAVAILABLE,
 // DEADLINE_EXCEEDED, UNIMPLEMENTED. Thread-safe: share one client.
@@ -47,8 +52,9 @@ struct ClientOptions {
   std::string tls_key_file;
   // Expected name in lmdd's certificate, if it differs from the target host.
   std::string tls_server_name;
-  // Attempts per call when lmdd is UNAVAILABLE (1 = no retry), and the first
-  // backoff; each further backoff doubles, up to 2 s.
+  // Attempts per call when lmdd is UNAVAILABLE or busy (1 = no retry), and
+  // the first backoff; each further backoff doubles, up to 2 s, and each wait
+  // is drawn between half and 1.5 times its backoff.
   int max_attempts = 4;
   std::chrono::milliseconds initial_backoff = std::chrono::milliseconds(100);
 };
@@ -60,7 +66,10 @@ class LmdClient {
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;
   // Streams the requests as one client stream (lmdd writes and acknowledges
-  // them in order; the response lists the stored maps). Not retried.
+  // them in order; the response lists the stored maps). Not retried. When the
+  // stream ends with an error (a bad map, say), the maps before it are stored
+  // all the same: the response then lists those requests' metadata as sent
+  // (an id lmdd would have assigned is not known then).
   grpc::Status StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
                                 v1::InsertMapsResponse* response) const;
   grpc::Status GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const;
@@ -78,9 +87,11 @@ class LmdClient {
   // A context with the deadline, token and collection header.
   std::unique_ptr<grpc::ClientContext> NewContext(const std::string& collection,
                                                   std::chrono::system_clock::time_point deadline) const;
-  // Runs `call` with a fresh context per attempt, retrying on UNAVAILABLE.
+  // Runs `call` with a fresh context per attempt, retrying (when `retry`)
+  // as the header says; *attempts (optional) receives how many it made.
   grpc::Status WithRetries(const std::string& collection,
-                           const std::function<grpc::Status(grpc::ClientContext*)>& call) const;
+                           const std::function<grpc::Status(grpc::ClientContext*)>& call, bool retry = true,
+                           int* attempts = nullptr) const;
 
   ClientOptions options_;
   std::unique_ptr<v1::LmdService::Stub> stub_;

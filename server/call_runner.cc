@@ -4,7 +4,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include "proto/metadata_keys.h"
 #include "server/grpc_status.h"
+#include "server/validate.h"
 
 namespace lmd::server {
 namespace {
@@ -30,7 +32,14 @@ std::string CallRunner::Authorization(const grpc::CallbackServerContext* context
 
 Status CallRunner::Authorize(const grpc::CallbackServerContext* context, const std::string& collection,
                              Access access) const {
-  return auth_->Check(Authorization(context), collection, access);
+  const std::string authorization = Authorization(context);
+  Status status = auth_->Authenticate(authorization);
+  if (status.ok()) status = ValidateCollectionName(collection);
+  return status.ok() ? auth_->Check(authorization, collection, access) : status;
+}
+
+Status CallRunner::AuthorizeServerWide(const grpc::CallbackServerContext* context, Access access) const {
+  return auth_->Check(Authorization(context), "", access);
 }
 
 std::string CallRunner::RequestId(const grpc::CallbackServerContext* context) {
@@ -73,6 +82,7 @@ grpc::ServerUnaryReactor* CallRunner::Unary(grpc::CallbackServerContext* context
     finish(ToGrpcStatus(work()));
   };
   if (!pool_->TrySubmit(std::move(task))) {
+    context->AddTrailingMetadata(kBusyMetadata, "1");
     finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                         "server busy: max_queued_calls calls are already waiting; retry later"));
   }

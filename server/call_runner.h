@@ -31,8 +31,12 @@ class CallRunner {
                                   const std::string& collection, const Status& allowed,
                                   std::function<Status()> work);
 
-  // The authorization verdict for `collection` and `access` (see auth.h).
+  // The verdict for a call on `collection` with `access` (see auth.h): a
+  // missing or unknown token first (UNAUTHENTICATED), then a bad collection
+  // name (INVALID_ARGUMENT, e.g. an empty one), then the token's rights.
   Status Authorize(const grpc::CallbackServerContext* context, const std::string& collection, Access access) const;
+  // The verdict for a server-wide call (every collection; Backup, Stats).
+  Status AuthorizeServerWide(const grpc::CallbackServerContext* context, Access access) const;
 
   // The "authorization" metadata of a call ("" if absent).
   static std::string Authorization(const grpc::CallbackServerContext* context);

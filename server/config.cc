@@ -88,6 +88,15 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
     config->max_abs_coordinate_m = parsed;
     return Status::Ok();
   }
+  if (key == "max_map_extent_m") {
+    char* end = nullptr;
+    const double parsed = std::strtod(value.c_str(), &end);
+    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 1150) {
+      return Status::InvalidArgument(key + " must be a number of metres in (0, 1150], got '" + value + "'");
+    }
+    config->max_map_extent_m = parsed;
+    return Status::Ok();
+  }
   if (key == "tls_cert_file") { config->tls_cert_file = value; return Status::Ok(); }
   if (key == "tls_key_file") { config->tls_key_file = value; return Status::Ok(); }
   if (key == "tls_client_ca_file") { config->tls_client_ca_file = value; return Status::Ok(); }

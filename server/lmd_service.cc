@@ -43,7 +43,7 @@ Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
 
 Lmd LmdServiceImpl::Describe(const v1::LocalMap& map, const DescriptorCache::Key& key) const {
   if (std::optional<Lmd> cached = cache_.Find(key)) return std::move(*cached);
-  Lmd lmd = DescribeForIndex(FromProto(map), store_->indexing());
+  Lmd lmd = DescribeForIndex(MethodView(FromProto(map)), store_->indexing());
   cache_.Put(key, lmd);
   return lmd;
 }
@@ -155,8 +155,10 @@ grpc::ServerUnaryReactor* LmdServiceImpl::ListCollections(grpc::CallbackServerCo
 
 grpc::ServerUnaryReactor* LmdServiceImpl::Stats(grpc::CallbackServerContext* context,
                                                 const v1::StatsRequest* request, v1::StatsResponse* response) {
-  return runner_->Unary(context, "Stats", request->collection(),
-                        runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+  const Status allowed = request->collection().empty()
+                            ? runner_->AuthorizeServerWide(context, Access::kRead)
+                            : runner_->Authorize(context, request->collection(), Access::kRead);
+  return runner_->Unary(context, "Stats", request->collection(), allowed, [=] {
     if (!request->collection().empty() && !store_->HasCollection(request->collection())) {
       return Status::NotFound("unknown collection '" + request->collection() + "'");
     }
@@ -175,7 +177,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Stats(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* LmdServiceImpl::Backup(grpc::CallbackServerContext* context,
                                                  const v1::BackupRequest* request, v1::BackupResponse* response) {
   // A backup copies every collection: it needs a server-wide write grant.
-  return runner_->Unary(context, "Backup", "", runner_->Authorize(context, "", Access::kWrite), [=] {
+  return runner_->Unary(context, "Backup", "", runner_->AuthorizeServerWide(context, Access::kWrite), [=] {
     if (request->directory().empty() || request->directory().front() != '/') {
       return Status::InvalidArgument("directory must be an absolute path on the server");
     }

@@ -1,5 +1,6 @@
 #include "server/stream_insert.h"
 
+#include "proto/metadata_keys.h"
 #include "server/grpc_status.h"
 #include "server/lmd_service.h"
 
@@ -11,7 +12,6 @@ StreamInsertReactor::StreamInsertReactor(grpc::CallbackServerContext* context, v
       response_(response),
       service_(service),
       runner_(runner),
-      authorization_(CallRunner::Authorization(context)),
       request_id_(runner->RequestId(context)) {
   StartRead(&request_);
 }
@@ -22,12 +22,13 @@ void StreamInsertReactor::OnReadDone(bool ok) {
     return;
   }
   if (!runner_->pool().TrySubmit([this] { Store(); })) {
+    context_->AddTrailingMetadata(kBusyMetadata, "1");
     Done(Status::ResourceExhausted("server busy: max_queued_calls calls are already waiting; retry later"));
   }
 }
 
 void StreamInsertReactor::Store() {
-  Status status = runner_->auth().Check(authorization_, request_.metadata().collection(), Access::kWrite);
+  Status status = runner_->Authorize(context_, request_.metadata().collection(), Access::kWrite);
   if (status.ok()) status = service_->Insert({&request_}, index_, response_);
   if (!status.ok()) return Done(status);
   ++index_;
@@ -35,7 +36,16 @@ void StreamInsertReactor::Store() {
 }
 
 void StreamInsertReactor::Done(const Status& status) {
-  const grpc::Status result = ToGrpcStatus(status);
+  grpc::Status result = ToGrpcStatus(status);
+  if (!result.ok()) {
+    // gRPC sends no response message with an error: say how many of the
+    // stream's maps (its first ones, in order) are stored all the same.
+    context_->AddTrailingMetadata(kStoredMapsMetadata, std::to_string(index_));
+    if (index_ > 0) {
+      result = grpc::Status(result.error_code(), result.error_message() + " (the stream's first " +
+                                                     std::to_string(index_) + " maps are stored)");
+    }
+  }
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
   runner_->Finished("StreamInsertMaps", request_id_, "", result, ms);
   Finish(result);

@@ -33,7 +33,6 @@ class StreamInsertReactor : public grpc::ServerReadReactor<v1::InsertMapRequest>
   v1::InsertMapsResponse* const response_;
   LmdServiceImpl* const service_;
   CallRunner* const runner_;
-  const std::string authorization_;
   const std::string request_id_;
   const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   v1::InsertMapRequest request_;

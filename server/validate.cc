@@ -1,6 +1,8 @@
 #include "server/validate.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace lmd::server {
 namespace {
@@ -37,6 +39,27 @@ Status CheckPose(const v1::Pose2& pose, double limit, const std::string& what) {
   return s;
 }
 
+// Bounding box of the map's points and poses.
+struct Extent {
+  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
+  bool empty = true;
+  void Add(double x, double y) {
+    if (empty) {
+      lo_x = hi_x = x, lo_y = hi_y = y, empty = false;
+      return;
+    }
+    lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+    lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+  }
+};
+
+// "12.5": metres for messages, without trailing zeros.
+std::string Metres(double m) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", m);
+  return buffer;
+}
+
 }  // namespace
 
 Status ValidateCollectionName(const std::string& name) {
@@ -67,16 +90,23 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
                                    " points exceed max_points_per_map (" +
                                    std::to_string(config.max_points_per_map) + ")");
   }
+  Extent extent;
   // The messages are built only for a bad value (a map has thousands of points).
   for (int i = 0; i < map.x_size(); ++i) {
-    if (CoordinateOk(map.x(i), limit) && CoordinateOk(map.y(i), limit)) continue;
+    if (CoordinateOk(map.x(i), limit) && CoordinateOk(map.y(i), limit)) {
+      extent.Add(map.x(i), map.y(i));
+      continue;
+    }
     const std::string point = where + ": point " + std::to_string(i);
     Status s = CheckCoordinate(map.x(i), limit, point + " x");
     if (s.ok()) s = CheckCoordinate(map.y(i), limit, point + " y");
     return s;
   }
   for (int i = 0; i < map.trajectory_size(); ++i) {
-    if (PoseOk(map.trajectory(i), limit)) continue;
+    if (PoseOk(map.trajectory(i), limit)) {
+      extent.Add(map.trajectory(i).x(), map.trajectory(i).y());
+      continue;
+    }
     return CheckPose(map.trajectory(i), limit, where + ": trajectory pose " + std::to_string(i));
   }
   if (static_cast<uint32_t>(map.scans_size()) > config.max_scans_per_map) {
@@ -91,9 +121,11 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
     if (!(scan.angle_step() > 0) || !std::isfinite(scan.angle_step()) || !std::isfinite(scan.first_angle())) {
       return Status::InvalidArgument(name + ": angle_step must be a positive finite number of radians");
     }
-    if (!(scan.max_range() > 0) || !std::isfinite(scan.max_range())) {
-      return Status::InvalidArgument(name + ": max_range must be a positive finite number of metres");
+    if (!(scan.max_range() > 0) || !(scan.max_range() <= config.max_map_extent_m)) {
+      return Status::InvalidArgument(name + ": max_range must be a positive number of metres up to max_map_extent_m (" +
+                                     Metres(config.max_map_extent_m) + ")");
     }
+    extent.Add(scan.pose().x(), scan.pose().y());
     if (static_cast<uint32_t>(scan.ranges_size()) > config.max_beams_per_scan) {
       return Status::InvalidArgument(name + ": " + std::to_string(scan.ranges_size()) +
                                      " beams exceed max_beams_per_scan (" +
@@ -104,6 +136,11 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
         return Status::InvalidArgument(name + ": range " + std::to_string(b) + " is negative or NaN");
       }
     }
+  }
+  const double width = extent.hi_x - extent.lo_x, height = extent.hi_y - extent.lo_y;
+  if (width > config.max_map_extent_m || height > config.max_map_extent_m) {
+    return Status::InvalidArgument(where + ": the map spans " + Metres(width) + " x " + Metres(height) +
+                                   " m, more than max_map_extent_m (" + Metres(config.max_map_extent_m) + ")");
   }
   return Status::Ok();
 }

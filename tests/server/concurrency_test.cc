@@ -101,24 +101,27 @@ TEST(ConcurrencyTest, ExpiredDeadlineIsReportedAndTheServerKeepsServing) {
   EXPECT_TRUE(server.client().InsertMaps(OneMapRequest("fleet", "after", SquareRoomMap()), &ignored).ok());
 }
 
-TEST(ConcurrencyTest, FullQueueIsRefusedWithResourceExhausted) {
-  TempDir dir;
-  server::ServerConfig config;
-  config.worker_threads = 1;
-  config.max_queued_calls = 1;
-  TestServer server(dir.path(), config);
+// Eight clients send overlapping batches (~50 ms of describing each) to one
+// worker with room for one queued call; returns how many batches were stored
+// and how many refused as busy.
+std::pair<int, int> EightOverlappingBatches(const TestServer& server, int max_attempts) {
+  client::ClientOptions options;
+  options.target = server.address();
+  options.max_attempts = max_attempts;
+  options.initial_backoff = std::chrono::milliseconds(20);
+  auto client = std::move(client::LmdClient::Create(options)).value();
   const std::vector<LocalMap> maps = DemoMaps();
   std::atomic<int> exhausted{0}, ok{0};
   std::vector<std::thread> clients;
   for (int c = 0; c < 8; ++c) {
     clients.emplace_back([&, c] {
       v1::InsertMapsRequest batch;
-      for (int i = 0; i < 16; ++i) {  // ~50 ms of describing per call: calls overlap
+      for (int i = 0; i < 16; ++i) {
         *batch.add_maps() = OneMapRequest("fleet", "c" + std::to_string(c) + "-" + std::to_string(i),
                                           ToProto(maps[(c * 16 + i) % maps.size()])).maps(0);
       }
       v1::InsertMapsResponse ignored;
-      const grpc::Status status = server.client().InsertMaps(batch, &ignored);
+      const grpc::Status status = client->InsertMaps(batch, &ignored);
       if (status.ok()) ++ok;
       if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
         EXPECT_NE(status.error_message().find("max_queued_calls"), std::string::npos);
@@ -126,10 +129,31 @@ TEST(ConcurrencyTest, FullQueueIsRefusedWithResourceExhausted) {
       }
     });
   }
-  for (auto& client : clients) client.join();
-  EXPECT_GT(ok.load(), 0);
-  EXPECT_GT(exhausted.load(), 0) << "8 concurrent batches never overflowed a queue of 1";
-  EXPECT_EQ(ok.load() + exhausted.load(), 8);
+  for (auto& thread : clients) thread.join();
+  return {ok.load(), exhausted.load()};
+}
+
+server::ServerConfig OneWorkerOneQueued() {
+  server::ServerConfig config;
+  config.worker_threads = 1;
+  config.max_queued_calls = 1;
+  return config;
+}
+
+TEST(ConcurrencyTest, FullQueueIsRefusedWithResourceExhausted) {
+  TempDir dir;
+  TestServer server(dir.path(), OneWorkerOneQueued());
+  const auto [ok, exhausted] = EightOverlappingBatches(server, /*max_attempts=*/1);
+  EXPECT_GT(ok, 0);
+  EXPECT_GT(exhausted, 0) << "8 concurrent batches never overflowed a queue of 1";
+  EXPECT_EQ(ok + exhausted, 8);
+}
+
+TEST(ConcurrencyTest, TheClientRetriesCallsRefusedAsBusy) {
+  TempDir dir;
+  TestServer server(dir.path(), OneWorkerOneQueued());
+  const auto [ok, exhausted] = EightOverlappingBatches(server, /*max_attempts=*/20);
+  EXPECT_EQ(ok, 8) << exhausted << " batches still refused after 20 attempts";
 }
 
 }  // namespace

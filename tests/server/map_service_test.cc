@@ -163,6 +163,26 @@ TEST_F(MapServiceTest, ListMapsPagesThroughEveryMapInIdOrder) {
   EXPECT_EQ(ids.front(), "map-100");
 }
 
+TEST_F(MapServiceTest, AFailedStreamSaysWhichOfItsMapsAreStored) {
+  TestServer server(dir_.path());
+  std::vector<v1::InsertMapRequest> requests;
+  for (int i = 0; i < 4; ++i) requests.push_back(OneMapRequest("fleet", "s" + std::to_string(i), SquareRoomMap()).maps(0));
+  requests[2].mutable_map()->clear_x();  // the third map is bad
+  v1::InsertMapsResponse response;
+  const grpc::Status status = server.client().StreamInsertMaps(requests, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("first 2 maps are stored"), std::string::npos) << status.error_message();
+  ASSERT_EQ(response.maps_size(), 2);
+  EXPECT_EQ(response.maps(1).map_id(), "s1");
+  v1::GetMapRequest get;
+  get.set_collection("fleet");
+  get.set_map_id("s1");
+  v1::GetMapResponse got;
+  EXPECT_TRUE(server.client().GetMap(get, &got).ok());
+  get.set_map_id("s3");
+  EXPECT_EQ(server.client().GetMap(get, &got).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
 TEST_F(MapServiceTest, StreamInsertAcknowledgesEveryMapInOrder) {
   TestServer server(dir_.path());
   std::vector<v1::InsertMapRequest> requests;
@@ -228,6 +248,25 @@ TEST_F(MapServiceTest, BadPosesAndFarCoordinatesAreRejectedNamingTheValue) {
   status = InsertOne(server, bad_scan);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("scan 0 pose.y is infinite"), std::string::npos) << status.error_message();
+}
+
+TEST_F(MapServiceTest, MapsWiderThanTheExtentLimitAreRejectedNamingIt) {
+  TestServer server(dir_.path());
+  v1::LocalMap wide = SquareRoomMap();
+  wide.set_x(0, -1000.0f);  // 1 km and a few metres across: beyond the index's pose words' reach
+  wide.set_x(1, 30.0f);
+  grpc::Status status = InsertOne(server, wide);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("max_map_extent_m"), std::string::npos) << status.error_message();
+
+  v1::LocalMap far_laser = SquareRoomMap();
+  v1::Scan* scan = far_laser.add_scans();
+  scan->set_angle_step(0.01);
+  scan->set_max_range(3e38f);
+  scan->add_ranges(1e30f);
+  status = InsertOne(server, far_laser);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("scan 0: max_range"), std::string::npos) << status.error_message();
 }
 
 TEST_F(MapServiceTest, MismatchedArraysAndBadNamesAreRejected) {

@@ -80,6 +80,19 @@ TEST_F(TokenTest, TokenIsConfinedToItsCollections) {
   EXPECT_TRUE(ClientWith("admin-secret")->Backup(backup, &backed_up).ok());
 }
 
+TEST_F(TokenTest, ABadCollectionNameIsInvalidEvenWithTokens) {
+  v1::InsertMapsResponse ignored;
+  grpc::Status status = ClientWith("writer-secret")->InsertMaps(OneMapRequest("", "a", SquareRoomMap()), &ignored);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("collection is empty"), std::string::npos) << status.error_message();
+  v1::StatsRequest stats;
+  stats.set_collection("bad/name");
+  v1::StatsResponse got;
+  EXPECT_EQ(ClientWith("admin-secret")->Stats(stats, &got).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  // A missing token still comes first.
+  EXPECT_EQ(ClientWith("")->Stats(stats, &got).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+}
+
 TEST(TokensFileTest, MalformedFileStopsTheServerFromStarting) {
   TempDir dir;
   std::ofstream(dir.path() + "/tokens") << "only-a-token\n";
