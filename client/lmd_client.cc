@@ -40,6 +40,12 @@ Result<std::shared_ptr<grpc::ChannelCredentials>> MakeCredentials(const ClientOp
   return grpc::SslCredentials(ssl);
 }
 
+// Whether `value` may be sent as a gRPC header value (printable ASCII);
+// gRPC aborts the process on any other byte.
+bool HeaderSafe(const std::string& value) {
+  return std::all_of(value.begin(), value.end(), [](char c) { return c >= 0x20 && c <= 0x7e; });
+}
+
 // Whether a failed call is worth repeating: lmdd (or the way to it) was
 // unavailable, or lmdd's queue was full.
 bool Retryable(const grpc::Status& status, const grpc::ClientContext& context) {
@@ -58,6 +64,7 @@ std::chrono::milliseconds Jittered(std::chrono::milliseconds backoff) {
 }  // namespace
 
 Result<std::unique_ptr<LmdClient>> LmdClient::Create(const ClientOptions& options) {
+  if (!HeaderSafe(options.token)) return Status::InvalidArgument("the token must be printable ASCII");
   Result<std::shared_ptr<grpc::ChannelCredentials>> credentials = MakeCredentials(options);
   if (!credentials.ok()) return credentials.status();
   grpc::ChannelArguments args;
@@ -74,7 +81,8 @@ std::unique_ptr<grpc::ClientContext> LmdClient::NewContext(const std::string& co
   auto context = std::make_unique<grpc::ClientContext>();
   context->set_deadline(deadline);
   if (!options_.token.empty()) context->AddMetadata("authorization", "Bearer " + options_.token);
-  if (!collection.empty()) context->AddMetadata(kCollectionMetadata, collection);
+  // A name that cannot be a header is no collection: lmdd says why.
+  if (!collection.empty() && HeaderSafe(collection)) context->AddMetadata(kCollectionMetadata, collection);
   return context;
 }
 

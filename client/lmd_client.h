@@ -61,7 +61,8 @@ struct ClientOptions {
 
 class LmdClient {
  public:
-  // InvalidArgument if a TLS file cannot be read.
+  // InvalidArgument if a TLS file cannot be read or the token is not
+  // printable ASCII.
   static Result<std::unique_ptr<LmdClient>> Create(const ClientOptions& options);
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;

@@ -15,22 +15,23 @@ std::string Trim(const std::string& s) {
   return s.substr(begin, end - begin + 1);
 }
 
-Status ParseUnsigned(const std::string& key, const std::string& value, uint64_t max, uint64_t* out) {
+Status ParseUnsigned(const std::string& key, const std::string& value, uint64_t min, uint64_t max, uint64_t* out) {
   char* end = nullptr;
   errno = 0;
   const unsigned long long parsed = std::strtoull(value.c_str(), &end, 10);
-  if (value.empty() || value[0] == '-' || *end != '\0' || errno != 0 || parsed > max) {
-    return Status::InvalidArgument(key + " must be a whole number from 0 to " + std::to_string(max) +
-                                   ", got '" + value + "'");
+  if (value.empty() || value[0] == '-' || *end != '\0' || errno != 0 || parsed < min || parsed > max) {
+    return Status::InvalidArgument(key + " must be a whole number from " + std::to_string(min) + " to " +
+                                   std::to_string(max) + ", got '" + value + "'");
   }
   *out = parsed;
   return Status::Ok();
 }
 
+// `min` 1 for limits: 0 would refuse every request.
 template <typename T>
-Status SetUnsigned(const std::string& key, const std::string& value, T* field) {
+Status SetUnsigned(const std::string& key, const std::string& value, T* field, uint64_t min = 0) {
   uint64_t parsed = 0;
-  Status status = ParseUnsigned(key, value, std::numeric_limits<T>::max(), &parsed);
+  Status status = ParseUnsigned(key, value, min, std::numeric_limits<T>::max(), &parsed);
   if (status.ok()) *field = static_cast<T>(parsed);
   return status;
 }
@@ -68,17 +69,17 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "log_level") { config->log_level = value; return Status::Ok(); }
   if (key == "max_message_bytes") {
     uint64_t parsed = 0;
-    Status status = ParseUnsigned(key, value, std::numeric_limits<int>::max(), &parsed);
+    Status status = ParseUnsigned(key, value, 4096, std::numeric_limits<int>::max(), &parsed);
     if (status.ok()) config->max_message_bytes = static_cast<int>(parsed);
     return status;
   }
-  if (key == "max_points_per_map") return SetUnsigned(key, value, &config->max_points_per_map);
-  if (key == "max_scans_per_map") return SetUnsigned(key, value, &config->max_scans_per_map);
-  if (key == "max_beams_per_scan") return SetUnsigned(key, value, &config->max_beams_per_scan);
-  if (key == "max_maps_per_batch") return SetUnsigned(key, value, &config->max_maps_per_batch);
-  if (key == "max_top_k") return SetUnsigned(key, value, &config->max_top_k);
+  if (key == "max_points_per_map") return SetUnsigned(key, value, &config->max_points_per_map, 1);
+  if (key == "max_scans_per_map") return SetUnsigned(key, value, &config->max_scans_per_map, 1);
+  if (key == "max_beams_per_scan") return SetUnsigned(key, value, &config->max_beams_per_scan, 1);
+  if (key == "max_maps_per_batch") return SetUnsigned(key, value, &config->max_maps_per_batch, 1);
+  if (key == "max_top_k") return SetUnsigned(key, value, &config->max_top_k, 1);
   if (key == "max_verify_candidates") return SetUnsigned(key, value, &config->max_verify_candidates);
-  if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections);
+  if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections, 1);
   if (key == "max_abs_coordinate_m") {
     char* end = nullptr;
     const double parsed = std::strtod(value.c_str(), &end);

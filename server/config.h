@@ -40,9 +40,10 @@ struct ServerConfig {
   double max_abs_coordinate_m = 100000.0;
   // Largest width or height of a map's bounding box (points, trajectory,
   // scan poses) and largest scan max_range, m. A local map spans tens of
-  // metres; the index's pose words reach 1638 m from the planned origin,
-  // hence at most 1150 (the diagonal of the box must fit).
-  double max_map_extent_m = 1000.0;
+  // metres (at most 61 m on the nine real logs); a map's scan-matching grids
+  // grow with its area (a 1 km map took GBs); the index's pose words reach
+  // 1638 m from the planned origin, hence at most 1150.
+  double max_map_extent_m = 200.0;
 
   // fsync the write-ahead log before acknowledging an insert. Off: an
   // acknowledged insert survives a crash of lmdd (the WAL is written before the

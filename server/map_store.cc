@@ -17,6 +17,7 @@
 #include "core/describe/lmd_codec.h"
 #include "core/index/index.h"
 #include "core/index/postings.h"
+#include "server/validate.h"
 
 namespace lmd::server {
 
@@ -103,6 +104,7 @@ Result<std::unique_ptr<MapStore>> MapStore::Open(const MapStoreOptions& options)
   store->collections_cf_ = handles[5];
   store->meta_cf_ = handles[6];
   store->sync_writes_ = options.sync_writes;
+  store->data_dir_ = options.data_dir;
   store->indexing_ = options.indexing;
 
   Status status = store->CheckMeta(options.data_dir);
@@ -492,9 +494,26 @@ Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, 
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {
+  namespace fs = std::filesystem;
   std::error_code error;
-  if (std::filesystem::exists(directory, error)) {
+  const fs::path target(directory);
+  if (!std::all_of(directory.begin(), directory.end(), [](char c) { return c >= 0x20 && c != 0x7f; })) {
+    return Status::InvalidArgument("backup directory " + Quoted(directory) + " holds control characters");
+  }
+  if (fs::exists(target, error)) {
     return Status::InvalidArgument("backup directory " + directory + " already exists");
+  }
+  if (!fs::is_directory(target.parent_path(), error)) {
+    return Status::InvalidArgument("backup directory " + directory + ": its parent " +
+                                   target.parent_path().string() + " is not an existing directory");
+  }
+  // A copy inside the live store would be copied into the next backup, and
+  // lost with the store.
+  const fs::path parent = fs::weakly_canonical(target.parent_path(), error);
+  const fs::path store = fs::weakly_canonical(data_dir_, error);
+  const bool inside = std::mismatch(store.begin(), store.end(), parent.begin(), parent.end()).first == store.end();
+  if (!error && inside) {
+    return Status::InvalidArgument("backup directory " + directory + " is inside lmdd's data directory " + data_dir_);
   }
   rocksdb::Checkpoint* checkpoint = nullptr;
   Status status = FromRocks(rocksdb::Checkpoint::Create(db_, &checkpoint), "preparing a backup");

@@ -144,6 +144,7 @@ class MapStore {
   rocksdb::ColumnFamilyHandle* collections_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* meta_cf_ = nullptr;
   bool sync_writes_ = false;
+  std::string data_dir_;
   IndexingConfig indexing_;
 
   // Serialises writers (InsertMaps, DeleteMap).

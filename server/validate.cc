@@ -62,10 +62,28 @@ std::string Metres(double m) {
 
 }  // namespace
 
+std::string Quoted(const std::string& value) {
+  constexpr size_t kMaxShown = 80;
+  std::string out = "'";
+  for (size_t i = 0; i < value.size() && i < kMaxShown; ++i) {
+    const unsigned char c = static_cast<unsigned char>(value[i]);
+    if (c >= 0x20 && c < 0x7f && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
+      out += escaped;
+    }
+  }
+  if (value.size() > kMaxShown) out += "...";
+  return out + "'";
+}
+
 Status ValidateCollectionName(const std::string& name) {
   if (name.empty()) return Status::InvalidArgument("collection is empty");
-  if (name.size() > 64 || !AllCharsIn(name, "._-")) {
-    return Status::InvalidArgument("collection '" + name + "' must be 1 to 64 characters from [A-Za-z0-9._-]");
+  if (name.size() > 64 || !AllCharsIn(name, "._-") || name.find_first_not_of('.') == std::string::npos) {
+    return Status::InvalidArgument("collection " + Quoted(name) +
+                                   " must be 1 to 64 characters from [A-Za-z0-9._-], not only dots");
   }
   return Status::Ok();
 }
@@ -73,7 +91,7 @@ Status ValidateCollectionName(const std::string& name) {
 Status ValidateMapId(const std::string& map_id, bool allow_empty) {
   if (map_id.empty()) return allow_empty ? Status::Ok() : Status::InvalidArgument("map_id is empty");
   if (map_id.size() > 128 || !AllCharsIn(map_id, "._:-")) {
-    return Status::InvalidArgument("map_id '" + map_id + "' must be 1 to 128 characters from [A-Za-z0-9._:-]");
+    return Status::InvalidArgument("map_id " + Quoted(map_id) + " must be 1 to 128 characters from [A-Za-z0-9._:-]");
   }
   return Status::Ok();
 }
@@ -118,8 +136,11 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
     const v1::Scan& scan = map.scans(i);
     const std::string name = where + ": scan " + std::to_string(i);
     if (!PoseOk(scan.pose(), limit)) return CheckPose(scan.pose(), limit, name + " pose");
-    if (!(scan.angle_step() > 0) || !std::isfinite(scan.angle_step()) || !std::isfinite(scan.first_angle())) {
+    if (!(scan.angle_step() > 0) || !std::isfinite(scan.angle_step())) {
       return Status::InvalidArgument(name + ": angle_step must be a positive finite number of radians");
+    }
+    if (!std::isfinite(scan.first_angle())) {
+      return Status::InvalidArgument(name + ": first_angle must be a finite number of radians");
     }
     if (!(scan.max_range() > 0) || !(scan.max_range() <= config.max_map_extent_m)) {
       return Status::InvalidArgument(name + ": max_range must be a positive number of metres up to max_map_extent_m (" +
@@ -148,7 +169,7 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
 Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index) {
   const v1::MapMetadata& meta = request.metadata();
   std::string where = "map " + std::to_string(index);
-  if (!meta.map_id().empty()) where += " ('" + meta.map_id() + "')";
+  if (!meta.map_id().empty()) where += " (" + Quoted(meta.map_id()) + ")";
   Status s = ValidateCollectionName(meta.collection());
   if (s.ok()) s = ValidateMapId(meta.map_id(), /*allow_empty=*/true);
   if (s.ok() && meta.has_pose_hint()) s = CheckPose(meta.pose_hint(), config.max_abs_coordinate_m, "pose_hint");

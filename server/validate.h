@@ -11,7 +11,12 @@
 
 namespace lmd::server {
 
-// 1 to 64 characters from [A-Za-z0-9._-]. InvalidArgument otherwise.
+// `value` in single quotes for a message or log line, bytes outside
+// printable ASCII (and the backslash) escaped as \xNN, cut after 80
+// characters: a client's bytes must not forge log lines.
+std::string Quoted(const std::string& value);
+
+// 1 to 64 characters from [A-Za-z0-9._-], not only dots. InvalidArgument otherwise.
 Status ValidateCollectionName(const std::string& name);
 
 // 1 to 128 characters from [A-Za-z0-9._:-]; empty allowed when allow_empty
@@ -20,7 +25,8 @@ Status ValidateMapId(const std::string& map_id, bool allow_empty);
 
 // A local map: at least one point, x and y of equal length, every coordinate
 // finite and within max_abs_coordinate_m, counts within the config's limits,
-// scans with a positive angle step and max range. `where` prefixes messages.
+// a bounding box within max_map_extent_m, scans with a positive angle step
+// and a max range up to that extent. `where` prefixes messages.
 Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, const std::string& where);
 
 // Metadata and map of one map to insert; `index` is its place in the batch.

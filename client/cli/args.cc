@@ -1,5 +1,6 @@
 #include "client/cli/args.h"
 
+#include <cerrno>
 #include <cstdlib>
 
 namespace lmd::cli {
@@ -29,15 +30,24 @@ Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::str
   return args;
 }
 
-Result<long> GetPositive(const Args& args, const std::string& key, long fallback) {
+Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max) {
   if (!args.Has(key)) return fallback;
   const std::string value = args.Get(key);
   char* end = nullptr;
+  errno = 0;
   const long parsed = std::strtol(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0' || parsed <= 0) {
-    return Status::InvalidArgument("--" + key + " must be a positive whole number, got '" + value + "'");
+  if (value.empty() || *end != '\0' || errno == ERANGE || parsed <= 0 || parsed > max) {
+    return Status::InvalidArgument("--" + key + " must be a whole number from 1 to " + std::to_string(max) +
+                                   ", got '" + value + "'");
   }
   return parsed;
+}
+
+Status CheckKnownOptions(const Args& args, const std::set<std::string>& known) {
+  for (const auto& [name, value] : args.options) {
+    if (known.count(name) == 0) return Status::InvalidArgument("unknown option --" + name + " (see lmdctl --help)");
+  }
+  return Status::Ok();
 }
 
 }  // namespace lmd::cli

@@ -26,7 +26,11 @@ struct Args {
 // "--name" takes the next word. InvalidArgument if a value is missing.
 Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::string>& switch_names);
 
-// The option as a positive integer, InvalidArgument naming it otherwise.
-Result<long> GetPositive(const Args& args, const std::string& key, long fallback);
+// The option as a whole number in [1, max], InvalidArgument naming it otherwise.
+Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max = 1000000);
+
+// InvalidArgument naming the first option that is not in `known` (a typo
+// such as --topk must not be ignored).
+Status CheckKnownOptions(const Args& args, const std::set<std::string>& known);
 
 }  // namespace lmd::cli

@@ -54,7 +54,10 @@ int StoreRobotOne(const CommandContext& ctx, const std::string& collection, cons
     }
     v1::InsertMapsResponse response;
     const grpc::Status status = ctx.client.InsertMaps(request, &response);
-    if (!status.ok()) return FailCall(status);
+    if (!status.ok()) {
+      progress.Abandon();
+      return FailCall(status);
+    }
     progress.Add(response.maps_size());
   }
   progress.Done();

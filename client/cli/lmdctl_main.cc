@@ -1,6 +1,7 @@
 // lmdctl: the command-line tool for lmdd.
 #include <cstdio>
 #include <map>
+#include <new>
 
 #include "client/cli/commands.h"
 
@@ -81,7 +82,11 @@ int Main(int argc, char** argv) {
   const auto command = Commands().find(args->positional.front());
   if (command == Commands().end()) return Fail("unknown command '" + args->positional.front() + "' (see --help)", 2);
   if (args->positional.size() > 1) return Fail("unexpected argument '" + args->positional[1] + "'", 2);
-  Result<long> timeout = GetPositive(*args, "timeout", 30);
+  const Status known = CheckKnownOptions(
+      *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
+              "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir"});
+  if (!known.ok()) return Fail(known.message(), 2);
+  Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);
 
   client::ClientOptions options;
@@ -99,4 +104,11 @@ int Main(int argc, char** argv) {
 
 }  // namespace lmd::cli
 
-int main(int argc, char** argv) { return lmd::cli::Main(argc, argv); }
+int main(int argc, char** argv) {
+  try {
+    return lmd::cli::Main(argc, argv);
+  } catch (const std::bad_alloc&) {  // e.g. a log that decompresses to gigabytes
+    std::fputs("lmdctl: out of memory (is the log or points file that large?)\n", stderr);
+    return 1;
+  }
+}

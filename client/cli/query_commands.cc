@@ -80,7 +80,10 @@ int IngestCommand(const CommandContext& ctx) {
     *insert->mutable_map() = ToProto((*maps)[i]);
     v1::InsertMapsResponse response;
     const grpc::Status status = ctx.client.InsertMaps(request, &response);
-    if (!status.ok()) return FailCall(status);
+    if (!status.ok()) {
+      progress.Abandon();
+      return FailCall(status);
+    }
     if (ctx.json) {  // as soon as lmdd acknowledged it
       std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
                   collection.c_str(), response.maps(0).point_count());

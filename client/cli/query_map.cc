@@ -1,5 +1,6 @@
 #include "client/cli/query_map.h"
 
+#include <cstdio>
 #include <cstdlib>
 
 #include "client/points_file.h"
@@ -21,11 +22,17 @@ std::string LogName(const std::string& path) {
   return name;
 }
 
-Result<double> PositiveNumber(const Args& args, const std::string& key, double fallback) {
+// Metres in [lo, hi] (a step of 1 nm made ingest build maps for ever).
+Result<double> Metres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
   if (!args.Has(key)) return fallback;
   char* end = nullptr;
-  const double value = std::strtod(args.Get(key).c_str(), &end);
-  if (*end != '\0' || !(value > 0)) return Status::InvalidArgument("--" + key + " must be a positive number of metres");
+  const std::string text = args.Get(key);
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !(value >= lo && value <= hi)) {
+    char range[64];
+    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g", lo, hi);
+    return Status::InvalidArgument("--" + key + range + ", got '" + text + "'");
+  }
   return value;
 }
 
@@ -36,8 +43,8 @@ Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args) {
   Result<LaserLog> log = ReadCarmenLog(path);
   if (!log.ok()) return log.status();
   LocalMapOptions options;
-  Result<double> length = PositiveNumber(args, "length", options.length_m);
-  Result<double> step = PositiveNumber(args, "step", options.step_m);
+  Result<double> length = Metres(args, "length", options.length_m, 0.5, 100.0);
+  Result<double> step = Metres(args, "step", options.step_m, 0.1, 100.0);
   if (!length.ok()) return length.status();
   if (!step.ok()) return step.status();
   options.length_m = *length;

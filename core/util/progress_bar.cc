@@ -34,6 +34,15 @@ void ProgressBar::Done() {
   if (terminal_ || last_decile_ != 10 || done_ != total_) Draw(true);
 }
 
+void ProgressBar::Abandon() {
+  if (finished_) return;
+  finished_ = true;
+  if (terminal_ && last_draw_ != std::chrono::steady_clock::time_point{}) {
+    std::fputs("\r\x1b[2K", out_);  // carriage return, erase the line
+    std::fflush(out_);
+  }
+}
+
 void ProgressBar::Draw(bool final_draw) {
   constexpr int kWidth = 30;
   const double fraction = total_ == 0 ? 1.0 : static_cast<double>(done_) / static_cast<double>(total_);

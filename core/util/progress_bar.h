@@ -22,6 +22,9 @@ class ProgressBar {
   void Add(size_t steps = 1) { Update(done_ + steps); }
   // Draws the final state and ends the line. Idempotent.
   void Done();
+  // The job failed: erases the bar's line on a terminal and draws nothing
+  // more, so that the error printed next is the last line.
+  void Abandon();
 
  private:
   void Draw(bool final_draw);

@@ -43,6 +43,10 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_NE(SetConfigValue("prepared_map_cache_entries", "500", &config).message().find("prepared_map_cache_mb"),
             std::string::npos);
   EXPECT_FALSE(SetConfigValue("default_max_offset_m", "0", &config).ok());
+  // A limit of 0 would refuse every request.
+  EXPECT_FALSE(SetConfigValue("max_top_k", "0", &config).ok());
+  EXPECT_FALSE(SetConfigValue("max_message_bytes", "0", &config).ok());
+  EXPECT_FALSE(SetConfigValue("max_map_extent_m", "2000", &config).ok());  // beyond the pose words' reach
   ASSERT_TRUE(SetConfigValue("reverse_conflict_weight", "4", &config).ok());
   EXPECT_EQ(config.reverse_conflict_weight, 4.0);
   EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);

@@ -116,6 +116,23 @@ TEST(DurabilityTest, SigtermStopsCleanly) {
   EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
+TEST(DurabilityTest, BackupRefusesDirectoriesItCannotOrShouldNotWrite) {
+  TempDir dir;
+  TestServer server(dir.path() + "/data");
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "m", SquareRoomMap()), &inserted).ok());
+  v1::BackupRequest request;
+  v1::BackupResponse response;
+  request.set_directory(dir.path() + "/no/such/parent");
+  grpc::Status status = server.client().Backup(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("not an existing directory"), std::string::npos) << status.error_message();
+  request.set_directory(dir.path() + "/data/inside");
+  status = server.client().Backup(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("inside lmdd's data directory"), std::string::npos) << status.error_message();
+}
+
 TEST(DurabilityTest, BackupRestoresIntoAFreshDirectory) {
   TempDir dir;
   const std::string backup = dir.path() + "/backup";

@@ -82,6 +82,29 @@ TEST_F(LmdctlTest, UsageErrorsExitTwo) {
   EXPECT_EQ(RunLmdctl("--help", dir_).exit_code, 0);
 }
 
+TEST_F(LmdctlTest, TyposAndOutOfRangeNumbersAreUsageErrors) {
+  const std::string query = "--server 127.0.0.1:1 query --collection site --file " + dir_.path() + "/room.txt ";
+  CliRun typo = RunLmdctl(query + "--topk 1", dir_);
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.err.find("unknown option --topk"), std::string::npos) << typo.err;
+  CliRun wrapped = RunLmdctl(query + "--top-k 4294967297", dir_);  // once wrapped to top_k 1
+  EXPECT_EQ(wrapped.exit_code, 2);
+  EXPECT_NE(wrapped.err.find("--top-k must be a whole number from 1 to"), std::string::npos) << wrapped.err;
+}
+
+TEST_F(LmdctlTest, ANameThatCannotBeAHeaderIsRefusedNotACrash) {
+  TestServer server(data_.path());
+  // popen runs /bin/sh (dash): printf makes the bytes (UTF-8 e acute, a tab).
+  CliRun run = RunLmdctl("--server " + server.address() + " list --collection \"$(printf 'caf\\303\\251\\tx')\"", dir_);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("INVALID_ARGUMENT"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("\\x09"), std::string::npos) << run.err;  // the tab, escaped
+  CliRun token = RunLmdctl("--server " + server.address() + " --token \"$(printf 't\\303\\266k')\" collections", dir_);
+  EXPECT_EQ(token.exit_code, 1) << token.err;
+  EXPECT_NE(token.err.find("printable ASCII"), std::string::npos) << token.err;
+}
+
 TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
   std::ofstream(dir_.path() + "/bad.txt") << "0 0\n1 oops\n";
   TestServer server(data_.path());
@@ -111,6 +134,14 @@ class LmdctlLogTest : public LmdctlTest {
     ASSERT_TRUE(WriteCarmenLog(dir_.path() + "/robot.log", log).ok());
   }
 };
+
+TEST_F(LmdctlLogTest, AStepTooSmallIsAUsageError) {
+  // A step of 1 nm once made ingest build maps for ever.
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 ingest --collection fleet --step 1e-9 --log " + dir_.path() + "/robot.log",
+                         dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("--step must be a number of metres from 0.1 to 100"), std::string::npos) << run.err;
+}
 
 TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   TestServer server(data_.path());

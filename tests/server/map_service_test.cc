@@ -276,6 +276,25 @@ TEST_F(MapServiceTest, MismatchedArraysAndBadNamesAreRejected) {
   EXPECT_EQ(InsertOne(server, uneven).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(InsertOne(server, SquareRoomMap(), "bad/name").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(InsertOne(server, SquareRoomMap(), "").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(InsertOne(server, SquareRoomMap(), "..").error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  // A client's bytes are escaped in messages (and so in lmdd's log lines).
+  v1::InsertMapsResponse ignored;
+  const grpc::Status status =
+      server.client().InsertMaps(OneMapRequest("site", "a\nFORGED [error] line", SquareRoomMap()), &ignored);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message().find('\n'), std::string::npos) << status.error_message();
+  EXPECT_NE(status.error_message().find("'a\\x0aFORGED"), std::string::npos) << status.error_message();
+}
+
+TEST_F(MapServiceTest, ASecondLmddCannotTakeAPortInUse) {
+  TestServer first(dir_.path());
+  ASSERT_TRUE(first.ok());
+  TempDir other;
+  server::ServerConfig config;
+  config.listen = first.address();
+  config.data_dir = other.path();
+  auto second = server::LmdServer::Start(config);
+  EXPECT_FALSE(second.ok()) << "two lmdd served " << first.address();
 }
 
 TEST_F(MapServiceTest, ABadMapInABatchStoresNothing) {
