@@ -15,6 +15,13 @@ bool AllCharsIn(const std::string& s, const std::string& extra) {
   return true;
 }
 
+// "12.5": metres for messages, without trailing zeros.
+std::string Metres(double m) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", m);
+  return buffer;
+}
+
 bool CoordinateOk(double v, double limit) { return std::isfinite(v) && std::fabs(v) <= limit; }
 
 // OK if v is finite and |v| <= limit; otherwise says which value is bad.
@@ -22,8 +29,8 @@ Status CheckCoordinate(double v, double limit, const std::string& what) {
   if (std::isnan(v)) return Status::InvalidArgument(what + " is NaN");
   if (std::isinf(v)) return Status::InvalidArgument(what + " is infinite");
   if (std::fabs(v) > limit) {
-    return Status::InvalidArgument(what + " = " + std::to_string(v) + " m exceeds max_abs_coordinate_m (" +
-                                   std::to_string(limit) + ")");
+    return Status::InvalidArgument(what + " = " + Metres(v) + " m exceeds max_abs_coordinate_m (" + Metres(limit) +
+                                   ")");
   }
   return Status::Ok();
 }
@@ -52,13 +59,6 @@ struct Extent {
     lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
   }
 };
-
-// "12.5": metres for messages, without trailing zeros.
-std::string Metres(double m) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", m);
-  return buffer;
-}
 
 }  // namespace
 
