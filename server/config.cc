@@ -81,22 +81,12 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_verify_candidates") return SetUnsigned(key, value, &config->max_verify_candidates);
   if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections, 1);
   if (key == "max_abs_coordinate_m") {
-    char* end = nullptr;
-    const double parsed = std::strtod(value.c_str(), &end);
-    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 1e9) {
-      return Status::InvalidArgument(key + " must be a positive number of metres, got '" + value + "'");
-    }
-    config->max_abs_coordinate_m = parsed;
-    return Status::Ok();
+    return SetNumber(key, value, [](double m) { return m > 0 && m <= 1e9; }, "a positive number of metres",
+                     &config->max_abs_coordinate_m);
   }
   if (key == "max_map_extent_m") {
-    char* end = nullptr;
-    const double parsed = std::strtod(value.c_str(), &end);
-    if (value.empty() || *end != '\0' || !(parsed > 0) || parsed > 1150) {
-      return Status::InvalidArgument(key + " must be a number of metres in (0, 1150], got '" + value + "'");
-    }
-    config->max_map_extent_m = parsed;
-    return Status::Ok();
+    return SetNumber(key, value, [](double m) { return m > 0 && m <= 1150; }, "a number of metres in (0, 1150]",
+                     &config->max_map_extent_m);
   }
   if (key == "tls_cert_file") { config->tls_cert_file = value; return Status::Ok(); }
   if (key == "tls_key_file") { config->tls_key_file = value; return Status::Ok(); }
