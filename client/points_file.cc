@@ -1,7 +1,9 @@
 #include "client/points_file.h"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace lmd::client {
@@ -19,6 +21,8 @@ bool ReadNumbers(std::istringstream& in, int count, double* out) {
 }  // namespace
 
 Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) return Status::InvalidArgument(path + " is a directory, not a points file");
   std::ifstream file(path);
   if (!file) return Status::IoError("cannot read points file " + path);
   v1::LocalMap map;
@@ -44,6 +48,11 @@ Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
     std::istringstream point(line);
     if (!ReadNumbers(point, 2, values)) {
       return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got '" + line + "'");
+    }
+    // Points travel as floats: a larger value would arrive infinite.
+    if (std::fabs(values[0]) > std::numeric_limits<float>::max() ||
+        std::fabs(values[1]) > std::numeric_limits<float>::max()) {
+      return Status::InvalidArgument(where + ": a coordinate is beyond the float range (about 3.4e38)");
     }
     map.add_x(static_cast<float>(values[0]));
     map.add_y(static_cast<float>(values[1]));

@@ -61,6 +61,11 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerCon
 LmdServer::LmdServer() = default;
 
 Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) {
+  const auto colon = config.listen.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == config.listen.size() ||
+      config.listen.find_first_not_of("0123456789", colon + 1) != std::string::npos) {
+    return Status::InvalidArgument("listen address '" + config.listen + "' is not HOST:PORT");
+  }
   const bool secured = !config.tls_cert_file.empty() && !config.tokens_file.empty();
   if (!IsLoopbackAddress(config.listen) && !secured && !config.allow_insecure_remote) {
     return Status::InvalidArgument("refusing to serve on " + config.listen +

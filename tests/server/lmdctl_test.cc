@@ -112,6 +112,14 @@ TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
                       dir_);
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("bad.txt:2"), std::string::npos) << run.err;
+
+  std::ofstream(dir_.path() + "/far.txt") << "0 0\n1e39 1\n";  // a double, not a float
+  run = RunLmdctl("--server " + server.address() + " insert --collection site --file " + dir_.path() + "/far.txt", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("far.txt:2: a coordinate is beyond the float range"), std::string::npos) << run.err;
+  run = RunLmdctl("--server " + server.address() + " insert --collection site --file " + dir_.path(), dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("is a directory"), std::string::npos) << run.err;
 }
 
 TEST_F(LmdctlTest, UnreachableServerFailsCleanly) {

@@ -370,6 +370,10 @@ TEST_F(MapServiceTest, RemoteAddressWithoutSecurityIsRefused) {
   auto started = server::LmdServer::Start(config);
   ASSERT_FALSE(started.ok());
   EXPECT_NE(started.status().message().find("allow_insecure_remote"), std::string::npos);
+  config.listen = "garbage";
+  started = server::LmdServer::Start(config);
+  ASSERT_FALSE(started.ok());
+  EXPECT_NE(started.status().message().find("is not HOST:PORT"), std::string::npos) << started.status().message();
 }
 
 }  // namespace
