@@ -162,6 +162,7 @@ class Parser {
     if (s.ok()) s = Number(line, t, 6, "accuracy", &dummy);
     if (s.ok()) s = Number(line, t, 7, "remission mode", &dummy);
     if (!s.ok()) return s;
+    if (!(res > 0) || res > M_PI) return Error(line, "angular resolution must be in (0, pi] rad");
     long n = 0;
     s = Count(line, t, 8, "beam count", 1, &n);
     if (!s.ok()) return s;

@@ -133,6 +133,11 @@ TEST(CarmenReader, TextInANumberNamesTheField) {
   ExpectError(Parse(line), "test.log:1:", "not a number: '1x'");
 }
 
+TEST(CarmenReader, RobotLaserWithoutAPositiveResolutionIsAnError) {
+  ExpectError(Parse("ROBOTLASER1 0 -1.5 3.0 0 20 0.01 0 5 1 2 3 4 25 0 7 8 0.25 0 0 0 0 0 0 0 0 1.0 h 1.0\n"),
+              "test.log:1:", "angular resolution must be in (0, pi]");
+}
+
 TEST(CarmenReader, WrongBeamCountIsAnError) {
   std::string line = FlaserLine(180, 1, 0, 0, 0);
   line.replace(0, 10, "FLASER 181");
