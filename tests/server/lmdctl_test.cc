@@ -143,7 +143,7 @@ class LmdctlLogTest : public LmdctlTest {
   }
 };
 
-TEST_F(LmdctlLogTest, AStepTooSmallIsAUsageError) {
+TEST_F(LmdctlLogTest, AStepTooSmallIsRefusedNamingTheRange) {
   // A step of 1 nm once made ingest build maps for ever.
   CliRun run = RunLmdctl("--server 127.0.0.1:1 ingest --collection fleet --step 1e-9 --log " + dir_.path() + "/robot.log",
                          dir_);
