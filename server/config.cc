@@ -97,6 +97,9 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
+  if (key == "busy_queued_calls") return SetUnsigned(key, value, &config->busy_queued_calls);
+  if (key == "busy_verify_candidates") return SetUnsigned(key, value, &config->busy_verify_candidates);
+  if (key == "busy_max_maps_scored") return SetUnsigned(key, value, &config->busy_max_maps_scored);
   if (key == "reverse_conflict_weight") {
     return SetNumber(key, value, [](double w) { return w >= 0 && w <= 100; }, "a weight in [0, 100]",
                      &config->reverse_conflict_weight);

@@ -133,6 +133,18 @@ struct ServerConfig {
   // of the 204 lmdctl queries on intel, aces, mit and fr079, the first hit
   // from another pass showed the place for 84 (3) vs 83 (0) of 141.
   double bound_skip_postings_per_map = 3.0;
+  // Under load, queries trade depth for time. A Retrieve or DetectChanges of
+  // the default method that starts while at least `busy_queued_calls` calls
+  // wait for a worker verifies `busy_verify_candidates` hits and scores at
+  // most `busy_max_maps_scored` maps (if less than the settings above), and
+  // says so in its response (reduced_depth). A request that names its own
+  // verify_candidates is not reduced. 0: never. Without this, lmd-bench load
+  // at 200 robots saturated lmdd in the VM's slow minutes (p99 0.5-0.6 s);
+  // with these depths throughout, p99 was 15-37 ms and place_at_1 0.942
+  // instead of 0.952 (docs/capacity.md).
+  uint32_t busy_queued_calls = 8;
+  uint32_t busy_verify_candidates = 5;
+  uint32_t busy_max_maps_scored = 60;
   // true: index each feature with its 3 m inner word too, 64 features per
   // map (WithInnerWords, core/describe/describer.h; lmd-eval's best). Fixed
   // when a store is created (a store made with the other setting is refused).

@@ -63,9 +63,10 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
     LocalMap map;  // the query map, own frame
     Lmd lmd;
     std::vector<VerifiedStoreHit> hits;  // ranked; verified ones carry the scan-matched pose
+    bool reduced_depth = false;          // answered at the busy depth (config.h busy_*)
   };
   // Maps whose id is in `exclude` are left out of the hits; `verify_candidates`
-  // is the request's (0: the server's). Cancelled once `context` is (checked
+  // is the request's (0: the server's, reduced while the server is busy). Cancelled once `context` is (checked
   // between scan matches).
   Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
                          v1::Method method, const google::protobuf::RepeatedPtrField<std::string>& exclude,

@@ -61,13 +61,14 @@ std::vector<v1::MethodStats> CallMetrics::Snapshot() const {
 }
 
 void CallMetrics::RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read,
-                                  uint64_t hits_verified) {
+                                  uint64_t hits_verified, bool reduced_depth) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++work_.queries;
   work_.maps_touched += maps_touched;
   work_.maps_scored += maps_scored;
   work_.postings_read += postings_read;
   work_.hits_verified += hits_verified;
+  work_.reduced_depth += reduced_depth;
 }
 
 std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
@@ -111,6 +112,8 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
           work_.maps_scored);
   counter("lmd_query_postings_read_total", "Index postings read, summed over queries.", work_.postings_read);
   counter("lmd_query_hits_verified_total", "Hits verified by scan matching, summed over queries.", work_.hits_verified);
+  counter("lmd_queries_reduced_depth_total", "Queries answered at the busy depth because calls were waiting.",
+          work_.reduced_depth);
   counter("lmd_maps_prepared_total", "Maps prepared for scan matching (misses of the prepared-map cache).",
           verifier.maps_prepared);
   out << "# HELP lmd_prepared_cache_bytes Bytes held by the prepared-map cache (prepared_map_cache_mb).\n"

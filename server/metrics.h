@@ -21,10 +21,12 @@ class CallMetrics {
 
   // Records the work of one query (Retrieve or DetectChanges) that reached
   // the index: maps with a posting read, maps scored exactly, postings read
-  // (core/index/index.h RetrieveStats) and hits verified by scan matching.
-  // Exported as Prometheus counters, so that an operator sees what
-  // max_maps_scored and verify_candidates cost.
-  void RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read, uint64_t hits_verified);
+  // (core/index/index.h RetrieveStats), hits verified by scan matching, and
+  // whether the server was busy and reduced the query's depth. Exported as
+  // Prometheus counters, so that an operator sees what max_maps_scored and
+  // verify_candidates cost, and how often load reduced them.
+  void RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read, uint64_t hits_verified,
+                       bool reduced_depth);
 
   // Calls, errors and latency percentiles per method, by method name.
   // Percentiles are bucket upper bounds: within 10 % of the true value.
@@ -59,6 +61,7 @@ class CallMetrics {
 
   struct QueryWork {
     uint64_t queries = 0, maps_touched = 0, maps_scored = 0, postings_read = 0, hits_verified = 0;
+    uint64_t reduced_depth = 0;
   };
 
   mutable std::mutex mutex_;

@@ -53,6 +53,13 @@ void AlignFromPose(const Frame& query_frame, const Frame& db_frame, const Pose2&
   hit->offset = ToFrame(db_frame, TransformPoint(pose, query_frame.origin));
 }
 
+// The smaller of two max_maps_scored settings, where 0 means no limit.
+size_t FewerMapsScored(size_t a, size_t b) {
+  if (a == 0) return b;
+  if (b == 0) return a;
+  return std::min(a, b);
+}
+
 }  // namespace
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
@@ -83,9 +90,12 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   query.map = MethodView(FromProto(map));
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
   query.lmd = Describe(map, key);
+  query.reduced_depth = method == v1::METHOD_DEFAULT && verify_candidates == 0 && config_.busy_queued_calls > 0 &&
+                        runner_->pool().queued() >= config_.busy_queued_calls;
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
-  const size_t verify_depth = verify_candidates > 0 ? verify_candidates : config_.verify_candidates;
+  size_t verify_depth = verify_candidates > 0 ? verify_candidates : config_.verify_candidates;
+  if (query.reduced_depth) verify_depth = std::min<size_t>(verify_depth, config_.busy_verify_candidates);
   const bool verify = method == v1::METHOD_DEFAULT && verify_depth > 0;
   const size_t depth = verify ? std::max(wanted, verify_depth) : wanted;
   // Excluded maps may take places in the index's ranking: ask for that many more.
@@ -95,6 +105,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     options.max_offset_m = config_.default_max_offset_m;
     options.max_maps_scored = config_.max_maps_scored;
     options.bound_skip_postings_per_map = config_.bound_skip_postings_per_map;
+    if (query.reduced_depth) options.max_maps_scored = FewerMapsScored(options.max_maps_scored, config_.busy_max_maps_scored);
   }
   RetrieveStats work;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options, &work);
@@ -118,7 +129,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   }
   size_t verified = 0;
   for (const VerifiedStoreHit& hit : query.hits) verified += hit.verified;
-  metrics_->RecordQueryWork(work.maps_touched, work.maps_scored, work.postings_read, verified);
+  metrics_->RecordQueryWork(work.maps_touched, work.maps_scored, work.postings_read, verified, query.reduced_depth);
   if (query.hits.size() > wanted) query.hits.resize(wanted);
   return query;
 }
@@ -153,6 +164,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
     Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
                                    request->exclude_map_ids(), request->verify_candidates(), context);
     if (!query.ok()) return query.status();
+    response->set_reduced_depth(query->reduced_depth);
     for (size_t rank = 0; rank < query->hits.size(); ++rank) {
       if (context->IsCancelled()) return Status::Cancelled("call cancelled");
       const VerifiedStoreHit& hit = query->hits[rank];
@@ -178,6 +190,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
                                    request->exclude_map_ids(), request->verify_candidates(), context);
     if (!query.ok()) return query.status();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
+    response->set_reduced_depth(query->reduced_depth);
 
     std::vector<Lmd> dbs;  // descriptors of the hits still stored
     std::vector<const VerifiedStoreHit*> kept;

@@ -156,5 +156,58 @@ TEST(ConcurrencyTest, TheClientRetriesCallsRefusedAsBusy) {
   EXPECT_EQ(ok, 8) << exhausted << " batches still refused after 20 attempts";
 }
 
+// Sixteen robots ask at once of one worker: the queries that start while
+// others wait are answered at the busy depth (one verified hit) and say so;
+// a request that names its depth, and a query on an idle server, are not.
+TEST(ConcurrencyTest, QueriesStartedWhileCallsWaitAreAnsweredAtTheBusyDepth) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.worker_threads = 1;
+  config.busy_queued_calls = 1;
+  config.busy_verify_candidates = 1;
+  TestServer server(dir.path(), config);
+  const std::vector<LocalMap> maps = DemoMaps();
+  for (const LocalMap& map : maps) {
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("fleet", map.id, ToProto(map)), &inserted).ok());
+  }
+  auto verified_hits = [](const v1::RetrieveResponse& response) {
+    int verified = 0;
+    for (const v1::MapHit& hit : response.hits()) verified += hit.verified();
+    return verified;
+  };
+
+  std::atomic<int> reduced{0}, named_depth_reduced{0};
+  std::vector<std::string> failures[16];
+  std::vector<std::thread> robots;
+  for (int r = 0; r < 16; ++r) {
+    robots.emplace_back([&, r] {
+      v1::RetrieveRequest request = QueryFor(maps[(r * 5) % maps.size()]);
+      const bool names_depth = r % 4 == 3;
+      if (names_depth) request.set_verify_candidates(10);
+      v1::RetrieveResponse response;
+      const grpc::Status status = server.client().Retrieve(request, &response);
+      if (!status.ok()) return failures[r].push_back(status.error_message());
+      if (names_depth) {
+        named_depth_reduced += response.reduced_depth();
+      } else if (response.reduced_depth()) {
+        ++reduced;
+        if (verified_hits(response) > 1) failures[r].push_back("a busy answer verified more than one hit");
+      } else {
+        if (verified_hits(response) < 2) failures[r].push_back("a full answer verified fewer than two hits");
+      }
+    });
+  }
+  for (auto& robot : robots) robot.join();
+  for (const auto& robot_failures : failures) EXPECT_TRUE(robot_failures.empty()) << robot_failures[0];
+  EXPECT_GT(reduced, 0) << "no query of 12 sent at once to one worker saw another waiting";
+  EXPECT_EQ(named_depth_reduced, 0);
+
+  v1::RetrieveResponse alone;
+  ASSERT_TRUE(server.client().Retrieve(QueryFor(maps[0]), &alone).ok());
+  EXPECT_FALSE(alone.reduced_depth());
+  EXPECT_GE(verified_hits(alone), 2);
+}
+
 }  // namespace
 }  // namespace lmd::testing

@@ -15,7 +15,8 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   const std::string path = dir.path() + "/lmdd.conf";
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
                       << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n"
-                      << "bound_skip_postings_per_map = 0\n";
+                      << "bound_skip_postings_per_map = 0\nbusy_queued_calls = 4\nbusy_verify_candidates = 2\n"
+                      << "busy_max_maps_scored = 30\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
@@ -25,6 +26,9 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   EXPECT_EQ(config.prepared_map_cache_mb, 32u);
   EXPECT_EQ(config.max_maps_scored, 64u);
   EXPECT_EQ(config.bound_skip_postings_per_map, 0.0);
+  EXPECT_EQ(config.busy_queued_calls, 4u);
+  EXPECT_EQ(config.busy_verify_candidates, 2u);
+  EXPECT_EQ(config.busy_max_maps_scored, 30u);
 }
 
 TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
