@@ -138,10 +138,11 @@ struct ServerConfig {
   // wait for a worker verifies `busy_verify_candidates` hits and scores at
   // most `busy_max_maps_scored` maps (if less than the settings above), and
   // says so in its response (reduced_depth). A request that names its own
-  // verify_candidates is not reduced. 0: never. Without this, lmd-bench load
-  // at 200 robots saturated lmdd in the VM's slow minutes (p99 0.5-0.6 s);
-  // with these depths throughout, p99 was 15-37 ms and place_at_1 0.942
-  // instead of 0.952 (docs/capacity.md).
+  // verify_candidates is not reduced. 0: never. lmd-bench load at 200
+  // robots: p99 20-32 ms in 15 of 15 runs with 0.2-6 % of queries reduced,
+  // against 3 of 6 runs under 100 ms without (the others saturated in the
+  // VM's slow minutes, p99 0.3-0.9 s); place_at_1 0.947-0.952 either way
+  // (docs/capacity.md).
   uint32_t busy_queued_calls = 8;
   uint32_t busy_verify_candidates = 5;
   uint32_t busy_max_maps_scored = 60;

@@ -96,6 +96,9 @@ int IngestCommand(const CommandContext& ctx) {
   return 0;
 }
 
+constexpr const char* kReducedDepthNote =
+    "(lmdd was busy and answered at its reduced depth: fewer hits verified; --verify N asks for a depth)";
+
 int QueryCommand(const CommandContext& ctx) {
   v1::RetrieveRequest request;
   if (int code = FillQuery(ctx, &request)) return code;
@@ -110,6 +113,7 @@ int QueryCommand(const CommandContext& ctx) {
     }
   }
   if (!ctx.json && response.hits_size() == 0) std::printf("no map of '%s' matches\n", request.collection().c_str());
+  if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
   return 0;
 }
 
@@ -140,6 +144,7 @@ int ChangesCommand(const CommandContext& ctx) {
       }
     }
   }
+  if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
   return 0;
 }
 
