@@ -25,7 +25,7 @@ int InsertCommand(const CommandContext& ctx) {
   if (!status.ok()) return FailCall(status);
   for (const auto& meta : response.maps()) {
     if (ctx.json) {
-      std::printf("%s\n", ToJsonLine(meta).c_str());
+      std::printf("%s\n", MapJsonLine(meta).c_str());
     } else {
       std::printf("inserted %s/%s (%u points)\n", meta.collection().c_str(), meta.map_id().c_str(),
                   meta.point_count());
@@ -84,7 +84,7 @@ int ListMapsCommand(const CommandContext& ctx) {
     if (!status.ok()) return FailCall(status);
     for (const auto& meta : response.maps()) {
       if (ctx.json) {
-        std::printf("%s\n", ToJsonLine(meta).c_str());
+        std::printf("%s\n", MapJsonLine(meta).c_str());
       } else {
         std::printf("%-24s robot=%-10s sequence=%-6llu points=%u\n", meta.map_id().c_str(),
                     meta.robot_id().empty() ? "-" : meta.robot_id().c_str(),

@@ -1,6 +1,7 @@
 #include "client/cli/output.h"
 
 #include <google/protobuf/util/json_util.h>
+#include <google/protobuf/wrappers.pb.h>
 
 namespace lmd::cli {
 
@@ -11,6 +12,12 @@ std::string ToJsonLine(const google::protobuf::Message& message) {
   std::string json;
   const auto status = google::protobuf::util::MessageToJsonString(message, &json, options);
   return status.ok() ? json : "{}";
+}
+
+std::string MapJsonLine(const v1::MapMetadata& metadata) {
+  google::protobuf::StringValue id;  // its JSON form is the escaped string
+  id.set_value(metadata.map_id());
+  return "{\"id\":" + ToJsonLine(id) + "," + ToJsonLine(metadata).substr(1);
 }
 
 }  // namespace lmd::cli

@@ -6,9 +6,16 @@
 
 #include <google/protobuf/message.h>
 
+#include "lmd/v1/lmd.pb.h"
+
 namespace lmd::cli {
 
 // One message as a single-line JSON object.
 std::string ToJsonLine(const google::protobuf::Message& message);
+
+// A stored map's metadata as a JSON line that leads with its id, {"id": ...,
+// then the metadata's fields}: the form `ingest --json` prints, so that the
+// lines of `ingest`, `insert` and `maps` can be matched by id.
+std::string MapJsonLine(const v1::MapMetadata& metadata);
 
 }  // namespace lmd::cli

@@ -63,7 +63,7 @@ TEST_F(LmdctlTest, InsertThenListPrintsOneJsonObjectPerMap) {
   CliRun listed = RunLmdctl(base + "--json maps --collection site", dir_);
   ASSERT_EQ(listed.exit_code, 0) << listed.err;
   EXPECT_EQ(CountLines(listed.out), 2);
-  EXPECT_EQ(listed.out.rfind("{\"collection\":\"site\",\"map_id\":\"r1\"", 0), 0u) << listed.out;
+  EXPECT_EQ(listed.out.rfind("{\"id\":\"r1\",\"collection\":\"site\",\"map_id\":\"r1\"", 0), 0u) << listed.out;
 }
 
 TEST_F(LmdctlTest, MissingMapExitsOneWithOneLineOnStderr) {
@@ -163,6 +163,7 @@ TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   CliRun listed = RunLmdctl(base + "--json maps --collection fleet", dir_);
   ASSERT_EQ(listed.exit_code, 0) << listed.err;
   EXPECT_EQ(CountLines(listed.out), maps);
+  EXPECT_NE(listed.out.find("{\"id\":\"robot-0\","), std::string::npos) << listed.out;
 
   CliRun query = RunLmdctl(base + "--json query --collection fleet --top-k 3 --log " + dir_.path() +
                                "/robot.log --map 4", dir_);
