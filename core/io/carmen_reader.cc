@@ -60,6 +60,9 @@ bool ParseInt(std::string_view tok, long* out) {
 }
 
 constexpr long kMaxBeams = 100000;
+// m. A pose coordinate beyond this is a corrupt record, not a robot's
+// position (the nine real logs stay within a few hundred metres).
+constexpr double kMaxPoseCoordinate = 1e6;
 
 class Parser {
  public:
@@ -99,6 +102,10 @@ class Parser {
     Status s = Number(line, t, i, "pose x", &pose->x);
     if (s.ok()) s = Number(line, t, i + 1, "pose y", &pose->y);
     if (s.ok()) s = Number(line, t, i + 2, "pose theta", &pose->theta);
+    if (s.ok() && (std::abs(pose->x) > kMaxPoseCoordinate || std::abs(pose->y) > kMaxPoseCoordinate)) {
+      s = Error(line, "pose (" + std::string(t[i]) + ", " + std::string(t[i + 1]) + ") is more than 1e6 m from the origin");
+    }
+    if (s.ok() && std::abs(pose->theta) > 1e3) s = Error(line, "pose theta is not an angle: '" + std::string(t[i + 2]) + "'");
     return s;
   }
 

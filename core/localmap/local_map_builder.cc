@@ -73,14 +73,17 @@ std::vector<LocalMap> BuildLocalMaps(const LaserLog& log, const LocalMapOptions&
   const double eps = 1e-9;
   size_t previous_first = static_cast<size_t>(-1);
   std::vector<Scan> own;
-  for (size_t k = 0;; ++k) {
-    const double start = static_cast<double>(k) * options.step_m;
+  for (double k = 0;; ++k) {
+    const double start = k * options.step_m;
     const double end = start + options.length_m;
     if (end > total + eps) break;
     const size_t first = static_cast<size_t>(
         std::lower_bound(travel.begin(), travel.end(), start - eps) - travel.begin());
     const size_t last_excl = static_cast<size_t>(
         std::upper_bound(travel.begin(), travel.end(), end + eps) - travel.begin());
+    // Every start up to travel[first] gives this window again: go past it at
+    // once, so that a jump in the log costs one step, not one per step_m.
+    if (first < travel.size()) k = std::max(k, std::floor((travel[first] + eps) / options.step_m));
     if (first >= last_excl || first == previous_first) continue;
     previous_first = first;
 

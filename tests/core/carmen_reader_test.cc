@@ -152,6 +152,16 @@ TEST(CarmenReader, NanOrInfinitePoseIsAnError) {
   ExpectError(Parse(FlaserLine(180, 1, 0, INFINITY, 0)), "test.log:1:", "pose y is not finite");
 }
 
+// A corrupt pose far away used to make local-map building step through its
+// whole travel, 1 m at a time (lmdctl ingest never ended on 1e300).
+TEST(CarmenReader, AFarAwayOrNonAnglePoseIsAnError) {
+  ExpectError(Parse(FlaserLine(180, 1, 0, 0, 0) + FlaserLine(180, 1, 1e300, 0, 0)), "test.log:2:",
+              "more than 1e6 m from the origin");
+  ExpectError(Parse(FlaserLine(180, 1, 0, -2e6, 0)), "test.log:1:", "more than 1e6 m");
+  ExpectError(Parse(FlaserLine(180, 1, 0, 0, 1e30)), "test.log:1:", "pose theta is not an angle");
+  EXPECT_TRUE(Parse(FlaserLine(180, 1, 9e5, -9e5, -6.2)).ok());
+}
+
 TEST(CarmenReader, RawLaserWithoutAPoseIsAnError) {
   ExpectError(Parse("RAWLASER1 0 -1.57 3.14 0.0174 30 0.01 0 3 1 2 3 0 0 h 0\n"), "test.log:1:", "no pose");
 }

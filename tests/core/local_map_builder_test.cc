@@ -115,6 +115,19 @@ TEST(LocalMapBuilder, GapsInTheLogDoNotDuplicateMaps) {
   EXPECT_GT(maps.size(), 10u);
 }
 
+// A jump of 1e12 m (a corrupt log the reader did not catch) costs one step
+// of the windowing, not one per metre: without that this never returned.
+TEST(LocalMapBuilder, AHugeJumpIsCrossedInOneStep) {
+  LaserLog log = StraightLog(10.0, 0.5);
+  LaserLog far = StraightLog(10.0, 0.5);
+  for (Scan& s : far.scans) s.pose.x += 1e12;
+  log.scans.insert(log.scans.end(), far.scans.begin(), far.scans.end());
+  const auto maps = BuildLocalMaps(log);
+  ASSERT_FALSE(maps.empty());
+  EXPECT_EQ(maps.front().truth.travel_start, 0.0);
+  EXPECT_GT(maps.back().truth.travel_start, 1e12);  // windows on both sides of the jump
+}
+
 TEST(LocalMapBuilder, KeepScansFalseDropsScansButKeepsPoints) {
   LocalMapOptions o;
   o.keep_scans = false;
