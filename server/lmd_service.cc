@@ -1,5 +1,7 @@
 #include "server/lmd_service.h"
 
+#include <map>
+
 #include "proto/convert.h"
 #include "server/indexing.h"
 #include "server/stream_insert.h"
@@ -7,6 +9,23 @@
 
 namespace lmd::server {
 namespace {
+
+// A batch is one write, so it cannot hold one map twice: which of the two
+// should be stored is the client's mistake to say, not lmdd's to guess.
+Status DistinctIds(const v1::InsertMapsRequest& request) {
+  std::map<std::pair<std::string, std::string>, int> first;  // (collection, id) -> index in the batch
+  for (int i = 0; i < request.maps_size(); ++i) {
+    const v1::MapMetadata& meta = request.maps(i).metadata();
+    if (meta.map_id().empty()) continue;  // lmdd assigns distinct ids
+    const auto [at, inserted] = first.emplace(std::make_pair(meta.collection(), meta.map_id()), i);
+    if (!inserted) {
+      return Status::InvalidArgument("maps[" + std::to_string(at->second) + "] and maps[" + std::to_string(i) +
+                                     "] have the same id " + Quoted(meta.map_id()) + " in collection " +
+                                     Quoted(meta.collection()));
+    }
+  }
+  return Status::Ok();
+}
 
 constexpr uint32_t kDefaultPageSize = 1000;
 
@@ -87,6 +106,8 @@ grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext
       return Status::InvalidArgument(std::to_string(request->maps_size()) + " maps exceed max_maps_per_batch (" +
                                      std::to_string(config_.max_maps_per_batch) + ")");
     }
+    Status unique = DistinctIds(*request);
+    if (!unique.ok()) return unique;
     std::vector<const v1::InsertMapRequest*> maps;
     for (const auto& map : request->maps()) maps.push_back(&map);
     return Insert(maps, 0, response);

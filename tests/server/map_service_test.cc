@@ -68,6 +68,22 @@ TEST_F(MapServiceTest, AnAssignedIdNeverReplacesAMapItsClientNamed) {
   }
 }
 
+TEST_F(MapServiceTest, ABatchNamingOneMapTwiceIsRefusedAndStoresNothing) {
+  TestServer server(dir_.path());
+  v1::InsertMapsRequest request = OneMapRequest("site", "a", SquareRoomMap(12));
+  *request.add_maps() = OneMapRequest("site", "b", SquareRoomMap(16)).maps(0);
+  *request.add_maps() = OneMapRequest("site", "a", SquareRoomMap(20)).maps(0);
+  *request.add_maps() = OneMapRequest("other", "b", SquareRoomMap(20)).maps(0);  // another collection: fine
+  v1::InsertMapsResponse inserted;
+  const grpc::Status status = server.client().InsertMaps(request, &inserted);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("maps[0] and maps[2] have the same id 'a'"), std::string::npos)
+      << status.error_message();
+  v1::ListCollectionsResponse collections;
+  ASSERT_TRUE(server.client().ListCollections(&collections).ok());
+  EXPECT_EQ(collections.collections_size(), 0);
+}
+
 TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
   {
     TestServer server(dir_.path());
