@@ -97,6 +97,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
+  if (key == "retain_maps_per_collection") return SetUnsigned(key, value, &config->retain_maps_per_collection);
   if (key == "busy_queued_calls") return SetUnsigned(key, value, &config->busy_queued_calls);
   if (key == "busy_verify_candidates") return SetUnsigned(key, value, &config->busy_verify_candidates);
   if (key == "busy_max_maps_scored") return SetUnsigned(key, value, &config->busy_max_maps_scored);

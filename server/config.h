@@ -35,6 +35,12 @@ struct ServerConfig {
   uint32_t max_verify_candidates = 100;
   // Number of collections.
   uint32_t max_collections = 1000;
+  // Maps a collection keeps: an insert beyond it deletes the collection's
+  // oldest maps (insertion order) in the same write and lists them in the
+  // response (evicted). 0: keep every map. A fleet that stores a map per
+  // robot-second grows without bound and every query's first pass reads more
+  // postings as it grows (docs/capacity.md); a cap bounds both.
+  uint32_t retain_maps_per_collection = 0;
   // Largest absolute coordinate of a point or pose, m. Catches unit mistakes
   // (mm sent as m) and garbage before it reaches the method.
   double max_abs_coordinate_m = 100000.0;

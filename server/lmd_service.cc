@@ -86,9 +86,15 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     write.lmd = Describe(request->map());
     maps.push_back(std::move(write));
   }
-  Status stored = store_->InsertMaps(&maps, config_.max_collections);
+  InsertLimits limits;
+  limits.max_collections = config_.max_collections;
+  limits.retain_maps = config_.retain_maps_per_collection;
+  std::vector<v1::MapMetadata> evicted;
+  Status stored = store_->InsertMaps(&maps, limits, &evicted);
   if (!stored.ok()) return stored;
   for (const MapWrite& write : maps) *response->add_maps() = write.map.metadata();
+  for (v1::MapMetadata& meta : evicted) *response->add_evicted() = std::move(meta);
+  metrics_->RecordEvicted(evicted.size());
   return Status::Ok();
 }
 

@@ -4,9 +4,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <shared_mutex>
-#include <unordered_map>
 
 #include <rocksdb/db.h>
 #include <rocksdb/memtablerep.h>
@@ -30,7 +30,7 @@ struct CollectionState {
   mutable std::shared_mutex index_mutex;
   // Guarded by index_mutex (shared: queries; exclusive: applying a write).
   Index index;
-  std::unordered_map<uint64_t, std::string> map_ids;  // index id -> map id
+  std::map<uint64_t, std::string> map_ids;  // index id -> map id; ids grow with each insert, so oldest first
 };
 
 namespace {
@@ -238,7 +238,8 @@ Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
   return meta;
 }
 
-Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collections) {
+Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
+                            std::vector<v1::MapMetadata>* evicted) {
   std::lock_guard<std::mutex> lock(write_mutex_);
   // Counters change on copies, published only once the batch is written.
   std::map<std::string, internal::CollectionRecord> records;
@@ -340,9 +341,36 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
     written[key] = {index_id, &write};
     changes[collection].added.push_back({index_id, &write});
   }
-  if (collections_.size() + new_collections > max_collections) {
-    return Status::ResourceExhausted("max_collections (" + std::to_string(max_collections) +
+  if (collections_.size() + new_collections > limits.max_collections) {
+    return Status::ResourceExhausted("max_collections (" + std::to_string(limits.max_collections) +
                                      ") reached: cannot create another collection");
+  }
+  std::vector<v1::MapMetadata> oldest;  // evicted to keep within limits.retain_maps
+  if (limits.retain_maps > 0) {
+    for (auto& [name, record] : records) {
+      const CollectionState* state = FindCollection(name);
+      if (record.maps() > limits.retain_maps && state != nullptr) {
+        const std::set<uint64_t> replaced(changes[name].removed.begin(), changes[name].removed.end());
+        for (const auto& [index_id, map_id] : state->map_ids) {
+          if (record.maps() <= limits.retain_maps) break;
+          if (replaced.count(index_id) != 0) continue;  // its id is rewritten by this batch
+          const std::string key = MapKey(name, map_id);
+          Result<v1::MapMetadata> meta = ReadMetadata(key);
+          if (!meta.ok()) return meta.status();
+          Status removed = remove_old(name, key, &record);
+          if (!removed.ok()) return removed;
+          batch.Delete(maps_cf_, key);
+          batch.Delete(metadata_cf_, key);
+          batch.Delete(descriptors_cf_, key);
+          oldest.push_back(std::move(meta).value());
+        }
+      }
+      if (record.maps() > limits.retain_maps) {
+        return Status::ResourceExhausted("the batch holds more maps of collection '" + name +
+                                         "' than retain_maps_per_collection (" +
+                                         std::to_string(limits.retain_maps) + ")");
+      }
+    }
   }
   // Checked before the write, so that publishing below cannot fail.
   for (const auto& [name, record] : records) {
@@ -357,6 +385,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collection
   write_options.sync = sync_writes_;
   Status status = FromRocks(db_->Write(write_options, &batch), "writing maps");
   if (!status.ok()) return status;
+  if (evicted != nullptr) evicted->insert(evicted->end(), oldest.begin(), oldest.end());
 
   // Durable: now publish counters and index changes.
   for (auto& [name, record] : records) {

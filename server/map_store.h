@@ -67,6 +67,15 @@ struct StoreHit {
   MapHit hit;
 };
 
+// Limits of one insert, from lmdd's config.
+struct InsertLimits {
+  uint32_t max_collections = 1000;
+  // A collection keeps at most this many maps: an insert that would exceed it
+  // deletes the collection's oldest maps (in insertion order) in the same
+  // write. 0: no cap.
+  uint32_t retain_maps = 0;
+};
+
 struct CollectionState;
 
 class MapStore {
@@ -87,8 +96,12 @@ class MapStore {
   // indexes them. Empty map ids are assigned ("m" + 12 digits, increasing per
   // collection) and written back into *maps; an existing id is replaced
   // (its old postings removed in the same batch). Collections are created on
-  // first insert; ResourceExhausted if that would exceed max_collections.
-  Status InsertMaps(std::vector<MapWrite>* maps, uint32_t max_collections);
+  // first insert; ResourceExhausted if that would exceed max_collections, or
+  // if the batch alone holds more than retain_maps maps of one collection.
+  // The metadata of maps deleted to keep within retain_maps is appended to
+  // *evicted (oldest first; may be null).
+  Status InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
+                    std::vector<v1::MapMetadata>* evicted = nullptr);
 
   // NotFound naming the collection or the map if absent.
   Result<v1::StoredMap> GetMap(const std::string& collection, const std::string& map_id) const;

@@ -71,6 +71,12 @@ void CallMetrics::RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, u
   work_.reduced_depth += reduced_depth;
 }
 
+void CallMetrics::RecordEvicted(uint64_t maps) {
+  if (maps == 0) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  maps_evicted_ += maps;
+}
+
 std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
                                         const VerifierCache& verifier) const {
   std::ostringstream out;
@@ -112,6 +118,8 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
           work_.maps_scored);
   counter("lmd_query_postings_read_total", "Index postings read, summed over queries.", work_.postings_read);
   counter("lmd_query_hits_verified_total", "Hits verified by scan matching, summed over queries.", work_.hits_verified);
+  counter("lmd_maps_evicted_total", "Maps deleted to keep a collection within retain_maps_per_collection.",
+          maps_evicted_);
   counter("lmd_queries_reduced_depth_total", "Queries answered at the busy depth because calls were waiting.",
           work_.reduced_depth);
   counter("lmd_maps_prepared_total", "Maps prepared for scan matching (misses of the prepared-map cache).",

@@ -28,6 +28,9 @@ class CallMetrics {
   void RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read, uint64_t hits_verified,
                        bool reduced_depth);
 
+  // Records maps deleted to keep a collection within its cap.
+  void RecordEvicted(uint64_t maps);
+
   // Calls, errors and latency percentiles per method, by method name.
   // Percentiles are bucket upper bounds: within 10 % of the true value.
   std::vector<v1::MethodStats> Snapshot() const;
@@ -67,6 +70,7 @@ class CallMetrics {
   mutable std::mutex mutex_;
   std::map<std::string, Method> methods_;  // guarded by mutex_
   QueryWork work_;                         // guarded by mutex_
+  uint64_t maps_evicted_ = 0;              // guarded by mutex_
 };
 
 }  // namespace lmd::server

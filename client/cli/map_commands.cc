@@ -31,6 +31,12 @@ int InsertCommand(const CommandContext& ctx) {
                   meta.point_count());
     }
   }
+  if (!ctx.json) {
+    for (const auto& meta : response.evicted()) {
+      std::printf("evicted %s/%s (the collection's oldest map, over its cap)\n", meta.collection().c_str(),
+                  meta.map_id().c_str());
+    }
+  }
   return 0;
 }
 

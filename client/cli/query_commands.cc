@@ -70,6 +70,7 @@ int IngestCommand(const CommandContext& ctx) {
   Result<std::vector<LocalMap>> maps = LocalMapsFromLog(ctx.args);
   if (!maps.ok()) return Fail(maps.status().message());
   ProgressBar progress("ingest " + ctx.args.Get("log"), maps->size());
+  size_t evicted = 0;  // by the collection's cap (retain_maps_per_collection)
   for (size_t i = 0; i < maps->size(); ++i) {
     v1::InsertMapsRequest request;
     v1::InsertMapRequest* insert = request.add_maps();
@@ -84,6 +85,7 @@ int IngestCommand(const CommandContext& ctx) {
       progress.Abandon();
       return FailCall(status);
     }
+    evicted += static_cast<size_t>(response.evicted_size());
     if (ctx.json) {  // as soon as lmdd acknowledged it
       std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
                   collection.c_str(), response.maps(0).point_count());
@@ -93,6 +95,9 @@ int IngestCommand(const CommandContext& ctx) {
   }
   progress.Done();
   if (!ctx.json) std::printf("ingested %zu local maps into '%s'\n", maps->size(), collection.c_str());
+  if (!ctx.json && evicted > 0) {
+    std::printf("lmdd evicted the collection's %zu oldest maps to keep within its cap\n", evicted);
+  }
   return 0;
 }
 

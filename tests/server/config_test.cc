@@ -16,7 +16,7 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
                       << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n"
                       << "bound_skip_postings_per_map = 0\nbusy_queued_calls = 4\nbusy_verify_candidates = 2\n"
-                      << "busy_max_maps_scored = 30\n";
+                      << "busy_max_maps_scored = 30\nretain_maps_per_collection = 5000\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
@@ -29,6 +29,7 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   EXPECT_EQ(config.busy_queued_calls, 4u);
   EXPECT_EQ(config.busy_verify_candidates, 2u);
   EXPECT_EQ(config.busy_max_maps_scored, 30u);
+  EXPECT_EQ(config.retain_maps_per_collection, 5000u);
 }
 
 TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {

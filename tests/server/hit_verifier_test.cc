@@ -35,7 +35,7 @@ class HitVerifierTest : public ::testing::Test {
       write.lmd = query_lmd_;
       writes.push_back(std::move(write));
     }
-    ASSERT_TRUE(store_->InsertMaps(&writes, 10).ok());
+    ASSERT_TRUE(store_->InsertMaps(&writes, server::InsertLimits()).ok());
     RetrieveOptions retrieve;
     retrieve.top_k = 2;
     Result<std::vector<StoreHit>> hits = store_->Retrieve("c", query_lmd_, retrieve);

@@ -84,6 +84,60 @@ TEST_F(MapServiceTest, ABatchNamingOneMapTwiceIsRefusedAndStoresNothing) {
   EXPECT_EQ(collections.collections_size(), 0);
 }
 
+std::vector<std::string> ListedIds(const TestServer& server, const std::string& collection) {
+  v1::ListMapsRequest list;
+  list.set_collection(collection);
+  v1::ListMapsResponse listed;
+  EXPECT_TRUE(server.client().ListMaps(list, &listed).ok());
+  std::vector<std::string> ids;
+  for (const auto& meta : listed.maps()) ids.push_back(meta.map_id());
+  return ids;
+}
+
+TEST_F(MapServiceTest, ACappedCollectionEvictsItsOldestMapsAndSaysWhich) {
+  server::ServerConfig config;
+  config.retain_maps_per_collection = 3;
+  {
+    TestServer server(dir_.path(), config);
+    v1::InsertMapsResponse inserted;
+    for (const char* id : {"d", "c", "b"}) {  // insertion order, not id order, decides
+      ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", id, SquareRoomMap()), &inserted).ok());
+      EXPECT_EQ(inserted.evicted_size(), 0);
+    }
+    // Replacing a kept map adds none, so evicts none.
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "c", SquareRoomMap(24)), &inserted).ok());
+    EXPECT_EQ(inserted.evicted_size(), 0);
+    v1::InsertMapsRequest two = OneMapRequest("site", "a", SquareRoomMap());
+    *two.add_maps() = OneMapRequest("site", "e", SquareRoomMap()).maps(0);
+    ASSERT_TRUE(server.client().InsertMaps(two, &inserted).ok());
+    ASSERT_EQ(inserted.evicted_size(), 2);
+    EXPECT_EQ(inserted.evicted(0).map_id(), "d");  // the oldest
+    EXPECT_EQ(inserted.evicted(1).map_id(), "b");  // "c" was rewritten after "b"
+    EXPECT_EQ(ListedIds(server, "site"), (std::vector<std::string>{"a", "c", "e"}));
+
+    v1::RetrieveRequest query;
+    query.set_collection("site");
+    *query.mutable_map() = SquareRoomMap();
+    query.set_top_k(10);
+    v1::RetrieveResponse found;
+    ASSERT_TRUE(server.client().Retrieve(query, &found).ok());
+    for (const auto& hit : found.hits()) EXPECT_TRUE(hit.map_id() != "d" && hit.map_id() != "b") << hit.map_id();
+
+    // A batch that alone exceeds the cap is refused whole.
+    v1::InsertMapsRequest four = OneMapRequest("site", "f", SquareRoomMap());
+    for (const char* id : {"g", "h", "i"}) *four.add_maps() = OneMapRequest("site", id, SquareRoomMap()).maps(0);
+    const grpc::Status refused = server.client().InsertMaps(four, &inserted);
+    EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    EXPECT_NE(refused.error_message().find("retain_maps_per_collection (3)"), std::string::npos)
+        << refused.error_message();
+    EXPECT_EQ(ListedIds(server, "site"), (std::vector<std::string>{"a", "c", "e"}));
+  }
+  // The counters and the index agree with the maps after a restart.
+  TestServer reopened(dir_.path(), config);
+  ASSERT_TRUE(reopened.ok());
+  EXPECT_EQ(ListedIds(reopened, "site"), (std::vector<std::string>{"a", "c", "e"}));
+}
+
 TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
   {
     TestServer server(dir_.path());
