@@ -30,7 +30,10 @@ struct CollectionState {
   mutable std::shared_mutex index_mutex;
   // Guarded by index_mutex (shared: queries; exclusive: applying a write).
   Index index;
-  std::map<uint64_t, std::string> map_ids;  // index id -> map id; ids grow with each insert, so oldest first
+  // Index id -> map id. Ids grow with each insert, so the oldest map comes
+  // first. A writer (holding MapStore::write_mutex_, as every writer of it
+  // does) may read it without index_mutex.
+  std::map<uint64_t, std::string> map_ids;
 };
 
 namespace {
@@ -38,6 +41,9 @@ namespace {
 constexpr char kFormatKey[] = "format";
 constexpr char kFormatVersion[] = "lmd-store-2";
 constexpr char kIndexingKey[] = "indexing";
+
+// Maps an insert may evict beyond its own count (InsertLimits::retain_maps).
+constexpr size_t kMaxExtraEvictions = 256;
 
 std::string MapKey(const std::string& collection, const std::string& map_id) {
   return collection + "/" + map_id;
@@ -345,30 +351,35 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     return Status::ResourceExhausted("max_collections (" + std::to_string(limits.max_collections) +
                                      ") reached: cannot create another collection");
   }
-  std::vector<v1::MapMetadata> oldest;  // evicted to keep within limits.retain_maps
+  // Over the cap, the collection's oldest maps go in this write: at most the
+  // batch's own maps plus kMaxExtraEvictions, so that a lowered cap is reached
+  // over several inserts, not in one huge write (nor one huge response).
+  std::vector<v1::MapMetadata> oldest;
   if (limits.retain_maps > 0) {
     for (auto& [name, record] : records) {
-      const CollectionState* state = FindCollection(name);
-      if (record.maps() > limits.retain_maps && state != nullptr) {
-        const std::set<uint64_t> replaced(changes[name].removed.begin(), changes[name].removed.end());
-        for (const auto& [index_id, map_id] : state->map_ids) {
-          if (record.maps() <= limits.retain_maps) break;
-          if (replaced.count(index_id) != 0) continue;  // its id is rewritten by this batch
-          const std::string key = MapKey(name, map_id);
-          Result<v1::MapMetadata> meta = ReadMetadata(key);
-          if (!meta.ok()) return meta.status();
-          Status removed = remove_old(name, key, &record);
-          if (!removed.ok()) return removed;
-          batch.Delete(maps_cf_, key);
-          batch.Delete(metadata_cf_, key);
-          batch.Delete(descriptors_cf_, key);
-          oldest.push_back(std::move(meta).value());
-        }
-      }
-      if (record.maps() > limits.retain_maps) {
-        return Status::ResourceExhausted("the batch holds more maps of collection '" + name +
-                                         "' than retain_maps_per_collection (" +
+      const size_t batch_maps = changes[name].added.size();
+      if (batch_maps > limits.retain_maps) {
+        return Status::ResourceExhausted("the batch holds " + std::to_string(batch_maps) + " maps of collection '" +
+                                         name + "', more than retain_maps_per_collection (" +
                                          std::to_string(limits.retain_maps) + ")");
+      }
+      const CollectionState* state = FindCollection(name);
+      if (state == nullptr) continue;
+      const std::set<uint64_t> replaced(changes[name].removed.begin(), changes[name].removed.end());
+      size_t budget = batch_maps + kMaxExtraEvictions;
+      for (auto it = state->map_ids.begin(); it != state->map_ids.end() && budget > 0; ++it) {
+        if (record.maps() <= limits.retain_maps) break;
+        if (replaced.count(it->first) != 0) continue;  // rewritten by this batch: now the newest
+        const std::string key = MapKey(name, it->second);
+        Result<v1::MapMetadata> meta = ReadMetadata(key);
+        if (!meta.ok()) return meta.status();
+        Status removed = remove_old(name, key, &record);
+        if (!removed.ok()) return removed;
+        batch.Delete(maps_cf_, key);
+        batch.Delete(metadata_cf_, key);
+        batch.Delete(descriptors_cf_, key);
+        oldest.push_back(std::move(meta).value());
+        --budget;
       }
     }
   }

@@ -72,7 +72,8 @@ struct InsertLimits {
   uint32_t max_collections = 1000;
   // A collection keeps at most this many maps: an insert that would exceed it
   // deletes the collection's oldest maps (in insertion order) in the same
-  // write. 0: no cap.
+  // write, at most 256 more than the insert adds (a lowered cap is reached
+  // over several inserts). 0: no cap.
   uint32_t retain_maps = 0;
 };
 

@@ -90,12 +90,15 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
   query.map = MethodView(FromProto(map));
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
   query.lmd = Describe(map, key);
-  query.reduced_depth = method == v1::METHOD_DEFAULT && verify_candidates == 0 && config_.busy_queued_calls > 0 &&
-                        runner_->pool().queued() >= config_.busy_queued_calls;
+  const bool busy = method == v1::METHOD_DEFAULT && verify_candidates == 0 && config_.busy_queued_calls > 0 &&
+                    runner_->pool().queued() >= config_.busy_queued_calls;
   RetrieveOptions options;
   const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
   size_t verify_depth = verify_candidates > 0 ? verify_candidates : config_.verify_candidates;
-  if (query.reduced_depth) verify_depth = std::min<size_t>(verify_depth, config_.busy_verify_candidates);
+  if (busy && config_.busy_verify_candidates < verify_depth) {
+    verify_depth = config_.busy_verify_candidates;
+    query.reduced_depth = true;
+  }
   const bool verify = method == v1::METHOD_DEFAULT && verify_depth > 0;
   const size_t depth = verify ? std::max(wanted, verify_depth) : wanted;
   // Excluded maps may take places in the index's ranking: ask for that many more.
@@ -105,7 +108,11 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
     options.max_offset_m = config_.default_max_offset_m;
     options.max_maps_scored = config_.max_maps_scored;
     options.bound_skip_postings_per_map = config_.bound_skip_postings_per_map;
-    if (query.reduced_depth) options.max_maps_scored = FewerMapsScored(options.max_maps_scored, config_.busy_max_maps_scored);
+    const size_t busy_maps_scored = FewerMapsScored(options.max_maps_scored, config_.busy_max_maps_scored);
+    if (busy && busy_maps_scored != options.max_maps_scored) {
+      options.max_maps_scored = busy_maps_scored;
+      query.reduced_depth = true;
+    }
   }
   RetrieveStats work;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.lmd, options, &work);

@@ -31,8 +31,10 @@ int InsertCommand(const CommandContext& ctx) {
                   meta.point_count());
     }
   }
-  if (!ctx.json) {
-    for (const auto& meta : response.evicted()) {
+  for (const auto& meta : response.evicted()) {
+    if (ctx.json) {
+      std::printf("%s\n", EvictedJsonLine(meta).c_str());
+    } else {
       std::printf("evicted %s/%s (the collection's oldest map, over its cap)\n", meta.collection().c_str(),
                   meta.map_id().c_str());
     }

@@ -14,10 +14,23 @@ std::string ToJsonLine(const google::protobuf::Message& message) {
   return status.ok() ? json : "{}";
 }
 
+namespace {
+
+std::string JsonString(const std::string& value) {
+  google::protobuf::StringValue wrapped;  // its JSON form is the escaped string
+  wrapped.set_value(value);
+  return ToJsonLine(wrapped);
+}
+
+}  // namespace
+
 std::string MapJsonLine(const v1::MapMetadata& metadata) {
-  google::protobuf::StringValue id;  // its JSON form is the escaped string
-  id.set_value(metadata.map_id());
-  return "{\"id\":" + ToJsonLine(id) + "," + ToJsonLine(metadata).substr(1);
+  return "{\"id\":" + JsonString(metadata.map_id()) + "," + ToJsonLine(metadata).substr(1);
+}
+
+std::string EvictedJsonLine(const v1::MapMetadata& metadata) {
+  return "{\"evicted\":" + JsonString(metadata.map_id()) + ",\"collection\":" + JsonString(metadata.collection()) +
+         "}";
 }
 
 }  // namespace lmd::cli

@@ -18,4 +18,8 @@ std::string ToJsonLine(const google::protobuf::Message& message);
 // lines of `ingest`, `insert` and `maps` can be matched by id.
 std::string MapJsonLine(const v1::MapMetadata& metadata);
 
+// A map lmdd deleted to keep its collection within its cap, as a JSON line
+// {"evicted": id, "collection": ...}, so that scripts tracking ids drop it.
+std::string EvictedJsonLine(const v1::MapMetadata& metadata);
+
 }  // namespace lmd::cli

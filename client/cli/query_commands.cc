@@ -89,6 +89,7 @@ int IngestCommand(const CommandContext& ctx) {
     if (ctx.json) {  // as soon as lmdd acknowledged it
       std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
                   collection.c_str(), response.maps(0).point_count());
+      for (const auto& meta : response.evicted()) std::printf("%s\n", EvictedJsonLine(meta).c_str());
       std::fflush(stdout);
     }
     progress.Add();

@@ -81,9 +81,16 @@ std::vector<LocalMap> BuildLocalMaps(const LaserLog& log, const LocalMapOptions&
         std::lower_bound(travel.begin(), travel.end(), start - eps) - travel.begin());
     const size_t last_excl = static_cast<size_t>(
         std::upper_bound(travel.begin(), travel.end(), end + eps) - travel.begin());
-    // Every start up to travel[first] gives this window again: go past it at
-    // once, so that a jump in the log costs one step, not one per step_m.
-    if (first < travel.size()) k = std::max(k, std::floor((travel[first] + eps) / options.step_m));
+    // Go past the starts that give this window again at once, so that a jump
+    // in the log costs one step, not one per step_m: if the window is empty
+    // (the next scan lies beyond its end), to the last start whose window is
+    // still empty; else past every start up to travel[first].
+    if (first < travel.size()) {
+      const double next = first >= last_excl
+                              ? std::ceil((travel[first] - eps - options.length_m) / options.step_m) - 1
+                              : std::floor((travel[first] + eps) / options.step_m);
+      k = std::max(k, next);
+    }
     if (first >= last_excl || first == previous_first) continue;
     previous_first = first;
 

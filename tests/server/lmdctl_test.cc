@@ -66,6 +66,20 @@ TEST_F(LmdctlTest, InsertThenListPrintsOneJsonObjectPerMap) {
   EXPECT_EQ(listed.out.rfind("{\"id\":\"r1\",\"collection\":\"site\",\"map_id\":\"r1\"", 0), 0u) << listed.out;
 }
 
+TEST_F(LmdctlTest, AnInsertIntoACappedCollectionPrintsWhatItEvicted) {
+  server::ServerConfig config;
+  config.retain_maps_per_collection = 1;
+  TestServer server(data_.path(), config);
+  const std::string base = "--server " + server.address() + " ";
+  ASSERT_EQ(RunLmdctl(base + "insert --collection site --id r1 --file " + dir_.path() + "/room.txt", dir_).exit_code, 0);
+  CliRun json = RunLmdctl(base + "--json insert --collection site --id r2 --file " + dir_.path() + "/room.txt", dir_);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(CountLines(json.out), 2);
+  EXPECT_NE(json.out.find("\n{\"evicted\":\"r1\",\"collection\":\"site\"}\n"), std::string::npos) << json.out;
+  CliRun text = RunLmdctl(base + "insert --collection site --id r3 --file " + dir_.path() + "/room.txt", dir_);
+  EXPECT_NE(text.out.find("evicted site/r2"), std::string::npos) << text.out;
+}
+
 TEST_F(LmdctlTest, MissingMapExitsOneWithOneLineOnStderr) {
   TestServer server(data_.path());
   CliRun run = RunLmdctl("--server " + server.address() + " get --collection site --id nope", dir_);

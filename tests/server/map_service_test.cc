@@ -123,6 +123,15 @@ TEST_F(MapServiceTest, ACappedCollectionEvictsItsOldestMapsAndSaysWhich) {
     ASSERT_TRUE(server.client().Retrieve(query, &found).ok());
     for (const auto& hit : found.hits()) EXPECT_TRUE(hit.map_id() != "d" && hit.map_id() != "b") << hit.map_id();
 
+    // A batch that rewrites the oldest map keeps it (it is now the newest)
+    // and evicts the next oldest.
+    v1::InsertMapsRequest rewrite = OneMapRequest("site", "c", SquareRoomMap(28));
+    *rewrite.add_maps() = OneMapRequest("site", "f", SquareRoomMap()).maps(0);
+    ASSERT_TRUE(server.client().InsertMaps(rewrite, &inserted).ok());
+    ASSERT_EQ(inserted.evicted_size(), 1);
+    EXPECT_EQ(inserted.evicted(0).map_id(), "a");
+    EXPECT_EQ(ListedIds(server, "site"), (std::vector<std::string>{"c", "e", "f"}));
+
     // A batch that alone exceeds the cap is refused whole.
     v1::InsertMapsRequest four = OneMapRequest("site", "f", SquareRoomMap());
     for (const char* id : {"g", "h", "i"}) *four.add_maps() = OneMapRequest("site", id, SquareRoomMap()).maps(0);
@@ -130,12 +139,39 @@ TEST_F(MapServiceTest, ACappedCollectionEvictsItsOldestMapsAndSaysWhich) {
     EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
     EXPECT_NE(refused.error_message().find("retain_maps_per_collection (3)"), std::string::npos)
         << refused.error_message();
-    EXPECT_EQ(ListedIds(server, "site"), (std::vector<std::string>{"a", "c", "e"}));
+    EXPECT_EQ(ListedIds(server, "site"), (std::vector<std::string>{"c", "e", "f"}));
   }
   // The counters and the index agree with the maps after a restart.
   TestServer reopened(dir_.path(), config);
   ASSERT_TRUE(reopened.ok());
-  EXPECT_EQ(ListedIds(reopened, "site"), (std::vector<std::string>{"a", "c", "e"}));
+  EXPECT_EQ(ListedIds(reopened, "site"), (std::vector<std::string>{"c", "e", "f"}));
+}
+
+TEST_F(MapServiceTest, ALoweredCapIsReachedOverSeveralInserts) {
+  std::string newest_eight_first;  // the id of the 293rd of the first 300 maps
+  {
+    TestServer uncapped(dir_.path());
+    v1::InsertMapsRequest many;
+    for (int i = 0; i < 300; ++i) *many.add_maps() = OneMapRequest("site", "", SquareRoomMap(8)).maps(0);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(uncapped.client().InsertMaps(many, &inserted).ok());
+    ASSERT_EQ(inserted.maps_size(), 300);
+    newest_eight_first = inserted.maps(292).map_id();
+  }
+  server::ServerConfig config;
+  config.retain_maps_per_collection = 10;
+  TestServer capped(dir_.path(), config);
+  v1::InsertMapsResponse inserted;
+  // At most 256 evictions beyond the insert's own map per write.
+  ASSERT_TRUE(capped.client().InsertMaps(OneMapRequest("site", "new1", SquareRoomMap(8)), &inserted).ok());
+  EXPECT_EQ(inserted.evicted_size(), 257);
+  EXPECT_EQ(ListedIds(capped, "site").size(), 44u);
+  ASSERT_TRUE(capped.client().InsertMaps(OneMapRequest("site", "new2", SquareRoomMap(8)), &inserted).ok());
+  EXPECT_EQ(inserted.evicted_size(), 35);
+  const std::vector<std::string> kept = ListedIds(capped, "site");
+  ASSERT_EQ(kept.size(), 10u);
+  EXPECT_EQ(kept.back(), "new2");
+  EXPECT_EQ(kept.front(), newest_eight_first);  // the newest 8 of the first 300, then new1 and new2
 }
 
 TEST_F(MapServiceTest, MapsSurviveARestartOnTheSameDataDirectory) {
