@@ -145,7 +145,7 @@ struct ServerConfig {
   // most `busy_max_maps_scored` maps (if less than the settings above), and
   // says so in its response (reduced_depth). A request that names its own
   // verify_candidates is not reduced. 0: never. lmd-bench load at 200
-  // robots: p99 20-32 ms in 15 of 15 runs with 0.2-6 % of queries reduced,
+  // robots: p99 16-32 ms in 18 of 18 runs with 0.2-6 % of queries reduced,
   // against 3 of 6 runs under 100 ms without (the others saturated in the
   // VM's slow minutes, p99 0.3-0.9 s); place_at_1 0.947-0.952 either way
   // (docs/capacity.md).
