@@ -88,11 +88,14 @@ MethodSpec BestMethod() {
   // by one query), 0.754 -> 0.761 and 0.650 -> 0.664 on the six other logs
   // (seed 2, 80 queries each), at 1.2x the time per query. Row abl_offset_3.
   m.max_offset_m = 6.0;
-  // 40: the right place is among the first stage's top 20 for 83 % of the
-  // queries and among its top 50 for 91 % (all logs, seed 2); with the
-  // consistency - distance key, 20 -> 40 gave place@1 0.77 -> 0.79 (seed 2)
-  // at 1.8x the time per query (docs/results.md).
-  m.verify_top_n = 40;
+  // 160: the first stage still ranks many right maps low (repeated
+  // corridors), and since expansion, re-verification and run ordering every
+  // verified map counts. Place@1 / ANR / top-1 % with 40 / 80 / 160 on the
+  // tuning logs 0.952 / 6.12 / 0.614, 0.959 / 5.59 / 0.638, 0.956 / 4.69 /
+  // 0.651 and on the six confirmation logs 0.788 / 11.17 / 0.636, 0.824 /
+  // 9.62 / 0.675, 0.854 / 7.75 / 0.718, at 187 / 262 / 492 ms per query
+  // there (docs/results.md). Rows abl_verify_40 and abl_verify_20.
+  m.verify_top_n = 160;
   // The first stage ranks the place below 40 for about one query in ten (11 %
   // before inner words, docs/results.md), so when none of the 40 matched, 40
   // more: place@1 0.802 -> 0.824, change success@1 0.688 -> 0.704 on all
@@ -180,7 +183,7 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   MethodSpec a = ablation("abl_no_verify", "no geometric verification (first stage only)");
   a.verify_top_n = 0;
   v.push_back(a);
-  a = ablation("abl_no_verify_more", "no further 40 verified when none of the top 40 matched");
+  a = ablation("abl_no_verify_more", "no further 40 verified when none of the top 160 matched");
   a.verify_more_if_unmatched = 0;
   v.push_back(a);
   a = ablation("abl_offset_0.5", "max_offset_m = 0.5 (index default) in the first stage");
@@ -248,7 +251,10 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.mask_key_window = kInf;
   a.change_eval = true;
   v.push_back(a);
-  a = ablation("abl_verify_20", "verify the top 20 instead of the top 40");
+  a = ablation("abl_verify_40", "verify the top 40 instead of the top 160");
+  a.verify_top_n = 40;
+  v.push_back(a);
+  a = ablation("abl_verify_20", "verify the top 20 instead of the top 160");
   a.verify_top_n = 20;
   v.push_back(a);
   a = ablation("abl_no_inner", "no inner words, 80 features (lmdd's default descriptor)");
@@ -897,7 +903,7 @@ int RunRetrieval(int argc, char** argv) {
     if (args.Has("best-offset") && m.key != "abl_offset_0.5" && m.key != "abl_offset_3") {
       m.max_offset_m = std::stod(args.Get("best-offset"));
     }
-    if (args.Has("best-verify") && m.key != "abl_no_verify" && m.key != "abl_verify_20") {
+    if (args.Has("best-verify") && m.key != "abl_no_verify" && m.key.rfind("abl_verify_", 0) != 0) {
       m.verify_top_n = std::stoul(args.Get("best-verify"));
     }
     if (args.Has("best-rerank") && m.key.rfind("abl_rerank", 0) != 0) {
