@@ -147,7 +147,7 @@ struct ServerConfig {
   // verify_candidates is not reduced. 0: never. lmd-bench load at 200
   // robots: p99 16-32 ms in 18 of 18 runs with 0.2-6 % of queries reduced,
   // against 3 of 6 runs under 100 ms without (the others saturated in the
-  // VM's slow minutes, p99 0.3-0.9 s); place_at_1 0.947-0.952 either way
+  // VM's slow minutes, p99 0.3-0.9 s); place_at_1 0.947-0.956 over all runs
   // (docs/capacity.md).
   uint32_t busy_queued_calls = 8;
   uint32_t busy_verify_candidates = 5;

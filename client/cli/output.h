@@ -14,8 +14,8 @@ namespace lmd::cli {
 std::string ToJsonLine(const google::protobuf::Message& message);
 
 // A stored map's metadata as a JSON line that leads with its id, {"id": ...,
-// then the metadata's fields}: the form `ingest --json` prints, so that the
-// lines of `ingest`, `insert` and `maps` can be matched by id.
+// then the metadata's fields}, as `ingest --json` lines do, so that the lines
+// of `ingest`, `insert` and `maps` can be matched by id.
 std::string MapJsonLine(const v1::MapMetadata& metadata);
 
 // A map lmdd deleted to keep its collection within its cap, as a JSON line

@@ -62,6 +62,9 @@ void PrintHit(const v1::MapHit& hit) {
   std::printf("%s\n", hit.verified() ? "  verified" : "");
 }
 
+constexpr const char* kReducedDepthNote =
+    "(lmdd was busy and answered at its reduced depth: fewer hits verified; --verify N asks for a depth)";
+
 }  // namespace
 
 int IngestCommand(const CommandContext& ctx) {
@@ -101,9 +104,6 @@ int IngestCommand(const CommandContext& ctx) {
   }
   return 0;
 }
-
-constexpr const char* kReducedDepthNote =
-    "(lmdd was busy and answered at its reduced depth: fewer hits verified; --verify N asks for a depth)";
 
 int QueryCommand(const CommandContext& ctx) {
   v1::RetrieveRequest request;

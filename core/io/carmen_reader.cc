@@ -63,6 +63,8 @@ constexpr long kMaxBeams = 100000;
 // m. A pose coordinate beyond this is a corrupt record, not a robot's
 // position (the nine real logs stay within a few hundred metres).
 constexpr double kMaxPoseCoordinate = 1e6;
+// rad. Headings are kept unwrapped by some loggers, but never by this much.
+constexpr double kMaxPoseTheta = 1e3;
 
 class Parser {
  public:
@@ -103,9 +105,12 @@ class Parser {
     if (s.ok()) s = Number(line, t, i + 1, "pose y", &pose->y);
     if (s.ok()) s = Number(line, t, i + 2, "pose theta", &pose->theta);
     if (s.ok() && (std::abs(pose->x) > kMaxPoseCoordinate || std::abs(pose->y) > kMaxPoseCoordinate)) {
-      s = Error(line, "pose (" + std::string(t[i]) + ", " + std::string(t[i + 1]) + ") is more than 1e6 m from the origin");
+      s = Error(line, "pose (" + std::string(t[i]) + ", " + std::string(t[i + 1]) +
+                          ") is more than 1e6 m from the origin");
     }
-    if (s.ok() && std::abs(pose->theta) > 1e3) s = Error(line, "pose theta is not an angle: '" + std::string(t[i + 2]) + "'");
+    if (s.ok() && std::abs(pose->theta) > kMaxPoseTheta) {
+      s = Error(line, "pose theta is not an angle: '" + std::string(t[i + 2]) + "'");
+    }
     return s;
   }
 
