@@ -49,6 +49,7 @@ struct MethodSpec {
   Rerank rerank = Rerank::kOverlap;
   bool global_fallback = true;   // guess-free scan matching when the guided match is poor
   bool lazy_global = true;       // ... only if no candidate matched near its guess (VerifyConfig)
+  bool always_global = false;    // ... for every verified candidate, keeping the better (VerifyConfig)
   double verify_window_m = 1.0;  // m, scan-matching window around each guess (VerifyConfig)
   // Unverified maps up to this many positions before or after a matched map
   // in its log (the same robot's route: they overlap it) rank just after it,

@@ -88,14 +88,17 @@ MethodSpec BestMethod() {
   // by one query), 0.754 -> 0.761 and 0.650 -> 0.664 on the six other logs
   // (seed 2, 80 queries each), at 1.2x the time per query. Row abl_offset_3.
   m.max_offset_m = 6.0;
-  // 160: the first stage still ranks many right maps low (repeated
+  // 320: the first stage still ranks many right maps low (repeated
   // corridors), and since expansion, re-verification and run ordering every
   // verified map counts. Place@1 / ANR / top-1 % with 40 / 80 / 160 on the
   // tuning logs 0.952 / 6.12 / 0.614, 0.959 / 5.59 / 0.638, 0.956 / 4.69 /
   // 0.651 and on the six confirmation logs 0.788 / 11.17 / 0.636, 0.824 /
   // 9.62 / 0.675, 0.854 / 7.75 / 0.718, at 187 / 262 / 492 ms per query
-  // there (docs/results.md). Rows abl_verify_40 and abl_verify_20.
-  m.verify_top_n = 160;
+  // there. With the guess-free search for every verified map (below),
+  // 160 -> 320: 0.976 / 3.62 / 0.716 -> 0.979 / 2.84 / 0.732 and 0.880 /
+  // 6.54 / 0.768 -> 0.894 / 3.53 / 0.801, at 1.4-1.8x the time per query
+  // (docs/results.md). Rows abl_verify_160, abl_verify_40 and abl_verify_20.
+  m.verify_top_n = 320;
   // The first stage ranks the place below 40 for about one query in ten (11 %
   // before inner words, docs/results.md), so when none of the 40 matched, 40
   // more: place@1 0.802 -> 0.824, change success@1 0.688 -> 0.704 on all
@@ -150,6 +153,16 @@ MethodSpec BestMethod() {
   // (place@1 0.914 on the tuning logs). Row abl_no_reverify.
   m.reverify_unmatched = true;
   m.global_fallback = true;
+  // The guess-free search for every verified map, not only when none
+  // matched: in repeated corridors (aces) the guided match of a right map
+  // often settles on a look-alike pose metres or a half turn away, and a
+  // look-alike place then outranks it (45 of aces' 57 misses; seed 1).
+  // place@1 / ANR / top-1 % 0.956 / 4.69 / 0.651 -> 0.976 / 3.62 / 0.716 on
+  // the tuning logs, 0.854 / 7.75 / 0.718 -> 0.880 / 6.54 / 0.768 on the six
+  // others (aces among them, where the misses were read), at 1.3-1.6x the
+  // time per query (both verifying the top 160). Rows abl_lazy_global and
+  // abl_eager_global.
+  m.always_global = true;
   m.change_eval = true;
   m.change_geometric = true;
   m.geometric_masks = true;
@@ -183,7 +196,7 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   MethodSpec a = ablation("abl_no_verify", "no geometric verification (first stage only)");
   a.verify_top_n = 0;
   v.push_back(a);
-  a = ablation("abl_no_verify_more", "no further 40 verified when none of the top 160 matched");
+  a = ablation("abl_no_verify_more", "no further 40 verified when none of the top 320 matched");
   a.verify_more_if_unmatched = 0;
   v.push_back(a);
   a = ablation("abl_offset_0.5", "max_offset_m = 0.5 (index default) in the first stage");
@@ -225,8 +238,13 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a = ablation("abl_no_global", "no guess-free scan matching fallback");
   a.global_fallback = false;
   v.push_back(a);
-  a = ablation("abl_eager_global", "guess-free fallback for every poor candidate, even when another matched");
-  a.lazy_global = false;
+  a = ablation("abl_lazy_global",
+               "guess-free search only for poor candidates (overlap < 0.5) of queries none of whose candidates "
+               "matched (best until the fifteenth session)");
+  a.always_global = false;
+  v.push_back(a);
+  a = ablation("abl_eager_global", "guess-free search only for poor candidates (overlap < 0.5), even when another matched");
+  a.always_global = false, a.lazy_global = false;
   v.push_back(a);
   a = ablation("abl_nnd_masks", "change masks from the descriptors only (LOF + NN-d), no geometric masks");
   a.geometric_masks = false;
@@ -251,10 +269,13 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.mask_key_window = kInf;
   a.change_eval = true;
   v.push_back(a);
-  a = ablation("abl_verify_40", "verify the top 40 instead of the top 160");
+  a = ablation("abl_verify_160", "verify the top 160 instead of the top 320");
+  a.verify_top_n = 160;
+  v.push_back(a);
+  a = ablation("abl_verify_40", "verify the top 40 instead of the top 320");
   a.verify_top_n = 40;
   v.push_back(a);
-  a = ablation("abl_verify_20", "verify the top 20 instead of the top 160");
+  a = ablation("abl_verify_20", "verify the top 20 instead of the top 320");
   a.verify_top_n = 20;
   v.push_back(a);
   a = ablation("abl_no_inner", "no inner words, 80 features (lmdd's default descriptor)");
@@ -757,7 +778,7 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
   for (size_t i = 0; i < d.queries.size(); i += stride) qs.push_back(i);
   res.queries = qs.size();
 
-  std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, lazy_global, window)
+  std::map<std::string, std::unique_ptr<Verifier>> verifiers;  // per (global_fallback, lazy_global, always_global, window)
   for (const MethodSpec& m : specs) {
     const DescSet& main = describers.Get({m.planner, m.setting, m.word_bits, m.interest_cell_m, m.max_features, m.inner_radius_m});
     const DescSet* other = nullptr;
@@ -768,12 +789,14 @@ DatasetResults EvaluateDataset(const Dataset& d, const std::vector<MethodSpec>& 
     const Verifier* verifier = nullptr;
     if (m.verify_top_n > 0) {
       char key[64];
-      std::snprintf(key, sizeof key, "%d/%d/%g", m.global_fallback ? 1 : 0, m.lazy_global ? 1 : 0, m.verify_window_m);
+      std::snprintf(key, sizeof key, "%d/%d/%d/%g", m.global_fallback ? 1 : 0, m.lazy_global ? 1 : 0,
+                    m.always_global ? 1 : 0, m.verify_window_m);
       auto& v = verifiers[key];
       if (!v) {
         VerifyConfig vc;
         vc.global_fallback = m.global_fallback;
         vc.lazy_global = m.lazy_global;
+        vc.always_global = m.always_global;
         vc.window_m = m.verify_window_m;
         v = std::make_unique<Verifier>(&d.maps, vc);
       }
@@ -897,7 +920,8 @@ int RunRetrieval(int argc, char** argv) {
     specs = kept;
   }
   // Overrides of the best configuration for tuning runs: --best-offset M,
-  // --best-verify N, --best-rerank overlap|meandist|consistency|dist, --best-both 0|1, --best-window M.
+  // --best-verify N, --best-rerank overlap|meandist|consistency|dist, --best-both 0|1, --best-window M,
+  // --best-always-global 0|1.
   for (MethodSpec& m : specs) {
     if (m.group != "best" && m.group != "ablation") continue;
     if (args.Has("best-offset") && m.key != "abl_offset_0.5" && m.key != "abl_offset_3") {
@@ -918,6 +942,9 @@ int RunRetrieval(int argc, char** argv) {
     if (args.Has("best-planner")) m.planner = args.Get("best-planner") == "cor" ? Planner::kCoR : Planner::kCoG;
     if (args.Has("best-cell")) m.interest_cell_m = std::stod(args.Get("best-cell"));
     if (args.Has("best-features")) m.max_features = std::stoi(args.Get("best-features"));
+    if (args.Has("best-always-global") && m.key != "abl_lazy_global" && m.key != "abl_eager_global") {
+      m.always_global = args.Get("best-always-global") == "1";
+    }
   }
 
   RunInfo info;

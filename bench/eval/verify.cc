@@ -64,7 +64,7 @@ std::shared_ptr<const Verifier::Query> Verifier::Prepare(const LocalMap& query) 
 std::vector<Alignment> Verifier::Verify(const Query& query, const std::vector<size_t>& dbs,
                                        const std::vector<std::vector<Pose2>>& guesses) const {
   const VerifyConfig& config = impl_->config;
-  const bool lazy = config.global_fallback && config.lazy_global;
+  const bool lazy = config.global_fallback && config.lazy_global && !config.always_global;
   std::vector<Alignment> out;
   bool matched = false;
   for (size_t i = 0; i < dbs.size(); ++i) {
@@ -88,7 +88,7 @@ Alignment Verifier::Align(const Query& query, size_t db, const std::vector<Pose2
     best = MatchLocalMaps(query.prepared, map, guesses, impl_->options);
     have = true;
   }
-  if (global && (!have || best.score < impl_->config.global_below)) {
+  if (global && (!have || impl_->config.always_global || best.score < impl_->config.global_below)) {
     const ScanMatch global = MatchLocalMapsGlobal(query.prepared, map, impl_->options);
     if (!have || global.score > best.score) best = global;
   }

@@ -27,6 +27,11 @@ struct VerifyConfig {
   // matched near its guess with overlap >= matched_above (see Verify).
   bool lazy_global = true;
   double matched_above = 0.8;
+  // The guess-free search for every candidate, whatever its guided overlap
+  // (lazy_global and global_below then play no part); the better of the two
+  // alignments is kept. In repeated corridors the guided match often settles
+  // on a look-alike pose of a right map.
+  bool always_global = false;
   double inlier_radius_m = 0.3;   // m, overlap radius
 };
 
