@@ -8,7 +8,7 @@ namespace lmd::eval {
 int RunViewpoints(int argc, char** argv);
 // lmd-eval render (--log FILE --map INDEX | --demo [--map INDEX]) --out FILE.svg
 int RunRender(int argc, char** argv);
-// lmd-eval retrieval [--log FILE...] [--out DIR] [--seed N] [--threads N] [--methods a,b] [--no-ablations]
+// lmd-eval retrieval [--log FILE...] [--out DIR] [--seed N] [--threads N] [--methods a,b] [--ablations]
 int RunRetrieval(int argc, char** argv);
 // lmd-eval export --log FILE... --out DIR
 int RunExport(int argc, char** argv);

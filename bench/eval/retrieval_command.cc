@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <sstream>
 #include <unordered_map>
 #include <string>
 #include <vector>
@@ -58,9 +59,10 @@ MethodSpec PaperMethod(const std::string& key, const std::string& label, Planner
 
 // The best configuration measured (tuned on orebro and fr101, the descriptor
 // and the verification depth also on intel, all with seed 1; see
-// docs/results.md). lmdd serves it with four differences, each for CPU: one
+// docs/results.md). lmdd serves it with five differences, each for CPU: one
 // planner's frames, re-ranking by overlap - 2 conflicts, 10 verified hits
-// and no inner words by default (verify_candidates, inner_words); and it
+// and no inner words by default (verify_candidates, inner_words), the
+// guess-free search only when no hit matched near its guess; and it
 // neither promotes route neighbours, nor expands the query and verifies
 // what the expansion ranks first, nor orders runs of route neighbours by
 // mean distance (they mostly move the paper's ranks; the expansion's
@@ -156,7 +158,9 @@ MethodSpec BestMethod() {
   // The guess-free search for every verified map, not only when none
   // matched: in repeated corridors (aces) the guided match of a right map
   // often settles on a look-alike pose metres or a half turn away, and a
-  // look-alike place then outranks it (45 of aces' 57 misses; seed 1).
+  // look-alike place then outranks it (aces, seed 1: every one of its 57
+  // misses was a look-alike 4-48 m away, and in 40 of the 55 with a
+  // verified right map that map's pose was off by > 0.5 m or 5 deg).
   // place@1 / ANR / top-1 % 0.956 / 4.69 / 0.651 -> 0.976 / 3.62 / 0.716 on
   // the tuning logs, 0.854 / 7.75 / 0.718 -> 0.880 / 6.54 / 0.768 on the six
   // others (aces among them, where the misses were read), at 1.3-1.6x the
@@ -881,7 +885,7 @@ std::string Machine() {
 
 int RunRetrieval(int argc, char** argv) {
   Args args;
-  if (!args.Parse(argc, argv, 0, {"no-ablations", "paper-only"})) {
+  if (!args.Parse(argc, argv, 0, {"ablations"})) {
     std::fprintf(stderr, "lmd-eval retrieval: %s\n", args.error().c_str());
     return 2;
   }
@@ -910,12 +914,19 @@ int RunRetrieval(int argc, char** argv) {
     return 2;
   }
   dopt.threads = ro.threads;
-  std::vector<MethodSpec> specs = DefaultMethods(!args.Has("no-ablations"));
+  // --methods picks by key among all methods, ablation rows included.
+  std::vector<MethodSpec> specs = DefaultMethods(args.Has("ablations") || args.Has("methods"));
   if (args.Has("methods")) {  // comma-separated keys to keep
-    const std::string keep = "," + args.Get("methods") + ",";
     std::vector<MethodSpec> kept;
-    for (const MethodSpec& m : specs) {
-      if (keep.find("," + m.key + ",") != std::string::npos) kept.push_back(m);
+    std::string key;
+    std::istringstream keys(args.Get("methods"));
+    while (std::getline(keys, key, ',')) {
+      auto it = std::find_if(specs.begin(), specs.end(), [&](const MethodSpec& m) { return m.key == key; });
+      if (it == specs.end()) {
+        std::fprintf(stderr, "lmd-eval retrieval: unknown method '%s' in --methods\n", key.c_str());
+        return 2;
+      }
+      kept.push_back(*it);
     }
     specs = kept;
   }
