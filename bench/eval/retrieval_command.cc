@@ -200,7 +200,8 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   MethodSpec a = ablation("abl_no_verify", "no geometric verification (first stage only)");
   a.verify_top_n = 0;
   v.push_back(a);
-  a = ablation("abl_no_verify_more", "no further 40 verified when none of the top 320 matched");
+  a = ablation("abl_no_verify_more", "no further " + std::to_string(best.verify_more_if_unmatched) +
+                                         " verified when none of the top " + std::to_string(best.verify_top_n) + " matched");
   a.verify_more_if_unmatched = 0;
   v.push_back(a);
   a = ablation("abl_offset_0.5", "max_offset_m = 0.5 (index default) in the first stage");
@@ -273,15 +274,12 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   a.mask_key_window = kInf;
   a.change_eval = true;
   v.push_back(a);
-  a = ablation("abl_verify_160", "verify the top 160 instead of the top 320");
-  a.verify_top_n = 160;
-  v.push_back(a);
-  a = ablation("abl_verify_40", "verify the top 40 instead of the top 320");
-  a.verify_top_n = 40;
-  v.push_back(a);
-  a = ablation("abl_verify_20", "verify the top 20 instead of the top 320");
-  a.verify_top_n = 20;
-  v.push_back(a);
+  for (size_t n : {160, 40, 20}) {
+    const std::string top = std::to_string(n);
+    a = ablation("abl_verify_" + top, "verify the top " + top + " instead of the top " + std::to_string(best.verify_top_n));
+    a.verify_top_n = n;
+    v.push_back(a);
+  }
   a = ablation("abl_no_inner", "no inner words, 80 features (lmdd's default descriptor)");
   a.inner_radius_m = 0.0, a.max_features = ProductDescriberOptions().max_features;
   v.push_back(a);
