@@ -96,30 +96,22 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
-  if (key == "max_maps_scored") return SetUnsigned(key, value, &config->max_maps_scored);
   if (key == "retain_maps_per_collection") return SetUnsigned(key, value, &config->retain_maps_per_collection);
   if (key == "busy_queued_calls") return SetUnsigned(key, value, &config->busy_queued_calls);
   if (key == "busy_verify_candidates") return SetUnsigned(key, value, &config->busy_verify_candidates);
-  if (key == "busy_max_maps_scored") return SetUnsigned(key, value, &config->busy_max_maps_scored);
-  if (key == "reverse_conflict_weight") {
-    return SetNumber(key, value, [](double w) { return w >= 0 && w <= 100; }, "a weight in [0, 100]",
-                     &config->reverse_conflict_weight);
+  for (const char* removed : {"max_maps_scored", "busy_max_maps_scored", "reverse_conflict_weight",
+                              "verify_enough_matches", "default_max_offset_m", "bound_skip_postings_per_map"}) {
+    if (key == removed) {
+      return Status::InvalidArgument(key + " was removed: the default method no longer ranks with the LMD index "
+                                           "(core/localize; README 'What a query returns')");
+    }
   }
-  if (key == "verify_enough_matches") return SetUnsigned(key, value, &config->verify_enough_matches);
   if (key == "prepared_map_cache_entries") {
     return Status::InvalidArgument(
         "prepared_map_cache_entries was replaced by prepared_map_cache_mb (MiB of prepared maps)");
   }
   if (key == "prepared_map_cache_mb") return SetUnsigned(key, value, &config->prepared_map_cache_mb);
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
-  if (key == "default_max_offset_m") {
-    return SetNumber(key, value, [](double m) { return m > 0 && m <= 50; }, "a number of metres in (0, 50]",
-                     &config->default_max_offset_m);
-  }
-  if (key == "bound_skip_postings_per_map") {
-    return SetNumber(key, value, [](double n) { return n >= 0 && n <= 1e6; }, "a number in [0, 1e6]",
-                     &config->bound_skip_postings_per_map);
-  }
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "inner_words") return SetBool(key, value, &config->inner_words);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);

@@ -15,22 +15,22 @@ DescriptorCache::Key DescriptorCache::KeyOf(const std::string& map_bytes) {
   return key;
 }
 
-std::optional<Lmd> DescriptorCache::Find(const Key& key) {
+std::shared_ptr<const DescribedMap> DescriptorCache::Find(const Key& key) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = index_.find(key);
-  if (it == index_.end()) return std::nullopt;
+  if (it == index_.end()) return nullptr;
   entries_.splice(entries_.begin(), entries_, it->second);
   return it->second->second;
 }
 
-void DescriptorCache::Put(const Key& key, const Lmd& lmd) {
+void DescriptorCache::Put(const Key& key, std::shared_ptr<const DescribedMap> described) {
   if (capacity_ == 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
   if (const auto it = index_.find(key); it != index_.end()) {
     entries_.splice(entries_.begin(), entries_, it->second);
     return;
   }
-  entries_.emplace_front(key, lmd);
+  entries_.emplace_front(key, std::move(described));
   index_[key] = entries_.begin();
   if (entries_.size() > capacity_) {
     index_.erase(entries_.back().first);

@@ -1,20 +1,21 @@
-// DescriptorCache: the descriptors of recently seen local maps, by content.
-// A robot typically sends the same map twice in a row (DetectChanges, then
-// InsertMaps, or the reverse); describing costs milliseconds (viewpoint
-// planning and histograms), looking it up here microseconds. Keyed by two
-// independent 64-bit hashes of the map's wire bytes plus their length, so a
-// wrong hit needs a 128-bit collision. Thread-safe; least recently used
-// entries are dropped beyond `capacity`.
+// DescriptorCache: what lmdd computed from recently seen local maps, by
+// content. A robot typically sends the same map twice in a row
+// (DetectChanges, then InsertMaps, or the reverse); describing and preparing
+// costs milliseconds (viewpoint planning, histograms, ray casting), looking
+// it up here microseconds. Keyed by two independent 64-bit hashes of the
+// map's wire bytes plus their length, so a wrong hit needs a 128-bit
+// collision. Thread-safe; least recently used entries are dropped beyond
+// `capacity`.
 #pragma once
 
 #include <cstdint>
 #include <list>
+#include <memory>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <unordered_map>
 
-#include "core/types.h"
+#include "server/indexing.h"
 
 namespace lmd::server {
 
@@ -28,14 +29,15 @@ class DescriptorCache {
   };
   static Key KeyOf(const std::string& map_bytes);
 
-  std::optional<Lmd> Find(const Key& key);
-  void Put(const Key& key, const Lmd& lmd);
+  // Null when absent.
+  std::shared_ptr<const DescribedMap> Find(const Key& key);
+  void Put(const Key& key, std::shared_ptr<const DescribedMap> described);
 
  private:
   struct KeyHash {
     size_t operator()(const Key& k) const { return static_cast<size_t>(k.a ^ (k.b * 0x9e3779b97f4a7c15ULL)); }
   };
-  using Entry = std::pair<Key, Lmd>;
+  using Entry = std::pair<Key, std::shared_ptr<const DescribedMap>>;
 
   const size_t capacity_;
   std::mutex mutex_;

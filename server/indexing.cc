@@ -10,6 +10,11 @@ Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config) {
   return Describe(map, PlanViewpoint(map, config.viewpoint), config.describer);
 }
 
+DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config) {
+  const LocalMap view = MethodView(map);
+  return {DescribeForIndex(view, config), PreparePlace(view, config.localize)};
+}
+
 LocalMap MethodView(LocalMap map) {
   map.points = DeduplicatePoints(map.points, LocalMapOptions().dedup_cell_m);
   return map;

@@ -1,14 +1,18 @@
 // How lmdd turns a local map into what it indexes: the viewpoint planner,
-// the describer and the index options, fixed for a store. The fingerprint of
-// these settings is saved in the store when it is created; a store made with
-// other settings is refused (its descriptors would not be comparable), never
-// rewritten.
+// the describer and the index options of the paper's methods, fixed for a
+// store, and the default method's place features. The fingerprint of the
+// paper's settings is saved in the store when it is created; a store made
+// with other settings is refused (its descriptors would not be comparable),
+// never rewritten. Place features carry their own version in each record;
+// records of another version are computed again from the stored map when
+// the store opens.
 #pragma once
 
 #include <string>
 
 #include "core/describe/describer.h"
 #include "core/index/retrieve_options.h"
+#include "core/localize/localizer.h"
 #include "core/types.h"
 #include "core/viewpoint/viewpoint.h"
 
@@ -18,6 +22,9 @@ struct IndexingConfig {
   ViewpointOptions viewpoint;  // planner: the product default
   DescriberOptions describer = ProductDescriberOptions();  // paper setting #6, 13-bit words
   IndexOptions index;          // W = 5 m, L = 2
+  // The default method (core/localize): its place features and map
+  // preparation are computed at insert; the rest applies per query.
+  LocalizeOptions localize;
 };
 
 // The product's indexing, with or without inner words (ServerConfig::inner_words).
@@ -25,6 +32,15 @@ IndexingConfig ProductIndexing(bool inner_words);
 
 // The planned frame and descriptor of `map` (in its own frame).
 Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config);
+
+// Everything lmdd computes from a map's content: the paper's descriptor and
+// the default method's preparation (scan-matching grids, place features).
+struct DescribedMap {
+  Lmd lmd;
+  PreparedPlace place;
+};
+// Both, of `map` as the method sees it (MethodView).
+DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config);
 
 // `map` as lmdd's method sees it: its points deduplicated on the local-map
 // grid (0.1 m), as lmd builds its own maps. A client's raw, dense or repeated

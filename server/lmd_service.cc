@@ -54,17 +54,14 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       runner_(runner),
       metrics_(metrics),
       cache_(config.descriptor_cache_entries),
-      verifier_(store, size_t{config.prepared_map_cache_mb} << 20) {}
+      prepared_(size_t{config.prepared_map_cache_mb} << 20) {}
 
-Lmd LmdServiceImpl::Describe(const v1::LocalMap& map) const {
-  return Describe(map, DescriptorCache::KeyOf(map.SerializeAsString()));
-}
-
-Lmd LmdServiceImpl::Describe(const v1::LocalMap& map, const DescriptorCache::Key& key) const {
-  if (std::optional<Lmd> cached = cache_.Find(key)) return std::move(*cached);
-  Lmd lmd = DescribeForIndex(MethodView(FromProto(map)), store_->indexing());
-  cache_.Put(key, lmd);
-  return lmd;
+std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap& map) const {
+  const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
+  if (std::shared_ptr<const DescribedMap> cached = cache_.Find(key)) return cached;
+  auto described = std::make_shared<const DescribedMap>(DescribeMap(FromProto(map), store_->indexing()));
+  cache_.Put(key, described);
+  return described;
 }
 
 double LmdServiceImpl::uptime_s() const {
@@ -79,11 +76,14 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     Status valid = ValidateInsert(*requests[i], config_, first_index + i);
     if (!valid.ok()) return valid;
   }
+  std::vector<std::shared_ptr<const DescribedMap>> described;
   for (const v1::InsertMapRequest* request : requests) {  // described outside the store's lock
     MapWrite write;
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
-    write.lmd = Describe(request->map());
+    described.push_back(Describe(request->map()));
+    write.lmd = described.back()->lmd;
+    write.place = described.back()->place.features;
     maps.push_back(std::move(write));
   }
   InsertLimits limits;
@@ -92,6 +92,10 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
   std::vector<v1::MapMetadata> evicted;
   Status stored = store_->InsertMaps(&maps, limits, &evicted);
   if (!stored.ok()) return stored;
+  // Prepared for scan matching already: the first query that hits them reuses it.
+  for (size_t i = 0; i < maps.size(); ++i) {
+    prepared_.Put(maps[i].map.metadata().collection(), maps[i].index_id, described[i]->place.map);
+  }
   for (const MapWrite& write : maps) *response->add_maps() = write.map.metadata();
   for (v1::MapMetadata& meta : evicted) *response->add_evicted() = std::move(meta);
   metrics_->RecordEvicted(evicted.size());
@@ -196,6 +200,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Stats(grpc::CallbackServerContext* con
     }
     for (auto& method : metrics_->Snapshot()) *response->add_methods() = std::move(method);
     response->set_uptime_s(uptime_s());
+    response->set_cpu_seconds(ProcessCpuSeconds());
     response->set_version(LMD_VERSION);
     return Status::Ok();
   });

@@ -10,10 +10,11 @@
 #include "lmd/v1/lmd.grpc.pb.h"
 #include "server/call_runner.h"
 #include "server/config.h"
-#include "server/descriptor_cache.h"
-#include "server/hit_verifier.h"
 #include "core/change/change_detector.h"
+#include "core/localize/localizer.h"
+#include "server/descriptor_cache.h"
 #include "server/map_store.h"
+#include "server/prepared_maps.h"
 
 namespace lmd::server {
 
@@ -52,32 +53,37 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const ServerConfig& config() const { return config_; }
 
  private:
-  // The descriptor of `map` as the store describes maps, from the cache when
-  // the same map was described recently; `key` is the map's content key
-  // (DescriptorCache::KeyOf of its wire bytes) if the caller has it.
-  Lmd Describe(const v1::LocalMap& map) const;
-  Lmd Describe(const v1::LocalMap& map, const DescriptorCache::Key& key) const;
+  // What lmdd computes from `map` (the paper's descriptor, the default
+  // method's preparation), from the cache when the same map was seen recently.
+  std::shared_ptr<const DescribedMap> Describe(const v1::LocalMap& map) const;
 
-  // A query: validated, described, and retrieved against its collection.
+  // A query: validated, described, and answered against its collection.
   struct Query {
-    LocalMap map;  // the query map, own frame
-    Lmd lmd;
-    std::vector<VerifiedStoreHit> hits;  // ranked; verified ones carry the scan-matched pose
-    bool reduced_depth = false;          // answered at the busy depth (config.h busy_*)
+    std::shared_ptr<const DescribedMap> described;
+    // METHOD_DEFAULT: the localisation, and the map id of each of its hits
+    // (empty where the map was deleted meanwhile).
+    Localization localization;
+    std::vector<std::string> hit_ids;
+    std::vector<StoreHit> paper_hits;  // paper methods: the LMD index's ranking
+    bool reduced_depth = false;        // answered at the busy depth (config.h busy_*)
   };
   // Maps whose id is in `exclude` are left out of the hits; `verify_candidates`
-  // is the request's (0: the server's, reduced while the server is busy). Cancelled once `context` is (checked
-  // between scan matches).
+  // is the request's (0: the server's, reduced while the server is busy);
+  // `with_changes`: the default method's change masks too. Cancelled once
+  // `context` is (checked between scan matches).
   Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
                          v1::Method method, const google::protobuf::RepeatedPtrField<std::string>& exclude,
-                         uint32_t verify_candidates, grpc::CallbackServerContext* context) const;
-  // The wire form of a hit (metadata, and the pose when the method gives one).
-  Result<v1::MapHit> ToWireHit(const std::string& collection, const Query& query, const VerifiedStoreHit& hit,
-                               size_t rank, const Lmd* db, v1::Method method) const;
+                         uint32_t verify_candidates, bool with_changes, grpc::CallbackServerContext* context) const;
+  // The wire form of a hit: of the default method, and of a paper method
+  // (with the pose the planned viewpoints imply, except for BoW).
+  v1::MapHit DefaultWireHit(const std::string& collection, const LocalizedHit& hit, const std::string& map_id,
+                            int rank) const;
+  v1::MapHit PaperWireHit(const std::string& collection, const Query& query, const StoreHit& hit, size_t rank,
+                          const Lmd* db, v1::Method method) const;
 
  public:
   double uptime_s() const;
-  const HitVerifier& verifier() const { return verifier_; }
+  const PreparedMapCache& prepared_maps() const { return prepared_; }
 
  private:
   const ServerConfig config_;
@@ -86,7 +92,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   CallMetrics* const metrics_;
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable DescriptorCache cache_;
-  mutable HitVerifier verifier_;
+  mutable PreparedMapCache prepared_;
 };
 
 }  // namespace lmd::server

@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 #include <shared_mutex>
+#include <unordered_map>
 
 #include <rocksdb/db.h>
 #include <rocksdb/memtablerep.h>
@@ -17,6 +18,7 @@
 #include "core/describe/lmd_codec.h"
 #include "core/index/index.h"
 #include "core/index/postings.h"
+#include "proto/convert.h"
 #include "server/validate.h"
 
 namespace lmd::server {
@@ -30,6 +32,8 @@ struct CollectionState {
   mutable std::shared_mutex index_mutex;
   // Guarded by index_mutex (shared: queries; exclusive: applying a write).
   Index index;
+  PlaceIndex places;
+  std::unordered_map<uint64_t, MapSource::Route> routes;  // index id -> route, where known
   // Index id -> map id. Ids grow with each insert, so the oldest map comes
   // first. A writer (holding MapStore::write_mutex_, as every writer of it
   // does) may read it without index_mutex.
@@ -69,6 +73,18 @@ v1::CollectionInfo ToInfo(const std::string& name, const internal::CollectionRec
   info.set_postings(record.postings());
   return info;
 }
+
+// The route a map's metadata gives (MapStore::RouteOf); false if unset.
+bool RouteFromMetadata(const v1::MapMetadata& meta, MapSource::Route* route) {
+  if (meta.robot_id().empty() || meta.sequence() == 0) return false;
+  uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a of the robot id
+  for (unsigned char c : meta.robot_id()) hash = (hash ^ c) * 0x100000001b3ULL;
+  *route = {hash, meta.sequence()};
+  return true;
+}
+
+// Writes of place features recomputed at open go out in batches of this many.
+constexpr size_t kMigrationBatch = 1000;
 
 // What a write does to one collection's index once the batch is durable.
 struct IndexChange {
@@ -174,7 +190,8 @@ Status MapStore::LoadCollections() {
 
 Status MapStore::RebuildIndexes() {
   const auto start = std::chrono::steady_clock::now();
-  size_t maps = 0;
+  size_t maps = 0, stale_maps = 0;
+  rocksdb::WriteBatch migrated;  // recomputed place features, written back
   std::unique_ptr<rocksdb::Iterator> it(db_->NewIterator({}, descriptors_cf_));
   for (it->SeekToFirst(); it->Valid(); it->Next()) {
     const std::string key = it->key().ToString();
@@ -188,11 +205,32 @@ Status MapStore::RebuildIndexes() {
     if (!lmd.ok()) return Status::Corruption("descriptor of " + key + ": " + lmd.status().message());
     Status added = state->index.Add(indexed.index_id(), *lmd);
     if (!added.ok()) return Status::Corruption("indexing " + key + ": " + added.message());
+    bool stale = false;
+    Result<PlaceFeatures> place = PlaceFeaturesOf(key, indexed, &stale);
+    if (!place.ok()) return place.status();
+    if (stale) {
+      indexed.set_place_features(EncodePlaceFeatures(*place));
+      migrated.Put(descriptors_cf_, key, indexed.SerializeAsString());
+      if (++stale_maps % kMigrationBatch == 0) {
+        Status written = FromRocks(db_->Write({}, &migrated), "writing recomputed place features");
+        if (!written.ok()) return written;
+        migrated.Clear();
+        spdlog::info("place features recomputed for {} maps", stale_maps);
+      }
+    }
+    added = state->places.Add(indexed.index_id(), std::move(place).value());
+    if (!added.ok()) return Status::Corruption("indexing the place features of " + key + ": " + added.message());
+    Result<v1::MapMetadata> meta = ReadMetadata(key);  // absent: the counts below report it
+    MapSource::Route route;
+    if (meta.ok() && RouteFromMetadata(*meta, &route)) state->routes[indexed.index_id()] = route;
     state->map_ids[indexed.index_id()] = key.substr(slash + 1);
     if (++maps % 100000 == 0) spdlog::info("rebuilding indexes: {} maps", maps);
   }
   Status status = FromRocks(it->status(), "reading descriptors");
   if (!status.ok()) return status;
+  if (migrated.Count() > 0) status = FromRocks(db_->Write({}, &migrated), "writing recomputed place features");
+  if (!status.ok()) return status;
+  if (stale_maps > 0) spdlog::info("place features (version {}) recomputed for {} maps", kPlaceFeatureVersion, stale_maps);
   // The stored maps themselves, counted by their metadata records.
   std::map<std::string, uint64_t> stored;
   std::unique_ptr<rocksdb::Iterator> meta(db_->NewIterator({}, metadata_cf_));
@@ -207,7 +245,8 @@ Status MapStore::RebuildIndexes() {
       return Status::Corruption("collection '" + name + "' is inconsistent: " + std::to_string(stored[name]) +
                                 " maps stored, " + std::to_string(state->record.maps()) + " counted");
     }
-    if (state->index.size() != state->record.maps() || state->index.PostingCount() != state->record.postings()) {
+    if (state->index.size() != state->record.maps() || state->index.PostingCount() != state->record.postings() ||
+        state->places.size() != state->record.maps()) {
       return Status::Corruption("collection '" + name + "' is inconsistent: " + std::to_string(state->record.maps()) +
                                 " maps and " + std::to_string(state->record.postings()) + " postings counted, " +
                                 std::to_string(state->index.size()) + " maps and " +
@@ -217,6 +256,24 @@ Status MapStore::RebuildIndexes() {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   spdlog::info("indexes rebuilt: {} maps in {} collections in {:.2f} s", maps, collections_.size(), seconds);
   return Status::Ok();
+}
+
+Result<PlaceFeatures> MapStore::PlaceFeaturesOf(const std::string& key, const internal::IndexedMap& indexed,
+                                                bool* stale) const {
+  if (!indexed.place_features().empty()) {
+    Result<PlaceFeatures> decoded = DecodePlaceFeatures(indexed.place_features());
+    if (decoded.ok()) return decoded;
+    if (static_cast<uint8_t>(indexed.place_features()[0]) == kPlaceFeatureVersion) {
+      return Status::Corruption("place features of " + key + ": " + decoded.status().message());
+    }
+  }
+  std::string value;
+  Status read = FromRocks(db_->Get({}, maps_cf_, key, &value), "reading map " + key);
+  if (!read.ok()) return read;
+  v1::StoredMap stored;
+  if (!stored.ParseFromString(value)) return Status::Corruption("stored map " + key + " does not parse");
+  *stale = true;
+  return PreparePlace(MethodView(FromProto(stored.map())), indexing_.localize).features;
 }
 
 CollectionState* MapStore::FindCollection(const std::string& collection) const {
@@ -337,6 +394,8 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     indexed.set_index_id(index_id);
     indexed.set_lmd(EncodeLmd(write.lmd));
     indexed.set_postings(static_cast<uint32_t>(PoseFeatureCount(write.lmd)));
+    indexed.set_place_features(EncodePlaceFeatures(write.place));
+    write.index_id = index_id;
     batch.Put(maps_cf_, key, write.map.SerializeAsString());
     batch.Put(metadata_cf_, key, meta->SerializeAsString());
     batch.Put(descriptors_cf_, key, indexed.SerializeAsString());
@@ -385,10 +444,10 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
   }
   // Checked before the write, so that publishing below cannot fail.
   for (const auto& [name, record] : records) {
-    if (record.maps() > Index::kMaxMaps) {
+    constexpr uint64_t kMaxMaps = std::min<uint64_t>(Index::kMaxMaps, PlaceIndex::kMaxMaps);
+    if (record.maps() > kMaxMaps) {
       return Status::ResourceExhausted("collection '" + name + "' would hold " + std::to_string(record.maps()) +
-                                       " maps; one collection's index holds at most " +
-                                       std::to_string(Index::kMaxMaps));
+                                       " maps; one collection's index holds at most " + std::to_string(kMaxMaps));
     }
   }
   for (const auto& [name, record] : records) batch.Put(collections_cf_, name, record.SerializeAsString());
@@ -412,11 +471,16 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
     for (uint64_t id : change.removed) {
       state->index.Remove(id);
+      state->places.Remove(id);
+      state->routes.erase(id);
       state->map_ids.erase(id);
     }
     for (const auto& [id, write] : change.added) {
       Status added = state->index.Add(id, write->lmd);
+      if (added.ok()) added = state->places.Add(id, write->place);
       if (!added.ok()) return Status::Internal("index out of step with the store: " + added.message());
+      MapSource::Route route;
+      if (RouteFromMetadata(write->map.metadata(), &route)) state->routes[id] = route;
       state->map_ids[id] = write->map.metadata().map_id();
     }
   }
@@ -489,6 +553,8 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   }
   std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
   state->index.Remove(indexed->index_id());
+  state->places.Remove(indexed->index_id());
+  state->routes.erase(indexed->index_id());
   state->map_ids.erase(indexed->index_id());
   return Status::Ok();
 }
@@ -531,6 +597,54 @@ Result<std::vector<StoreHit>> MapStore::Retrieve(const std::string& collection, 
   out.reserve(hits->size());
   for (const MapHit& hit : *hits) out.push_back({state->map_ids.at(hit.map_id), hit});
   return out;
+}
+
+Result<std::vector<PlaceHypothesis>> MapStore::SearchPlaces(const std::string& collection, const PlaceFeatures& query,
+                                                            const PlaceSearchOptions& options,
+                                                            const std::unordered_set<std::string>& excluded,
+                                                            PlaceSearchStats* stats) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  auto is_excluded = [&](uint64_t id) {
+    const auto it = state->map_ids.find(id);
+    return it == state->map_ids.end() || excluded.count(it->second) != 0;
+  };
+  return state->places.Search(query, options, is_excluded, stats);
+}
+
+Result<IndexedEntry> MapStore::Indexed(const std::string& collection, uint64_t index_id) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  const auto it = state->map_ids.find(index_id);
+  const PlaceFeatures* features = state->places.Features(index_id);
+  if (it == state->map_ids.end() || features == nullptr) {
+    return Status::NotFound("map " + std::to_string(index_id) + " of collection '" + collection + "' is gone");
+  }
+  return IndexedEntry{it->second, features->heading};
+}
+
+bool MapStore::RouteOf(const std::string& collection, uint64_t index_id, MapSource::Route* route) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return false;
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  const auto it = state->routes.find(index_id);
+  if (it == state->routes.end()) return false;
+  *route = it->second;
+  return true;
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {

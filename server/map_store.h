@@ -29,9 +29,12 @@
 #include <mutex>
 #include <shared_mutex>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "core/index/retrieve_options.h"
+#include "core/localize/map_source.h"
+#include "core/place/place_index.h"
 #include "core/status.h"
 #include "core/types.h"
 #include "lmd/internal/store.pb.h"
@@ -55,10 +58,19 @@ struct MapStoreOptions {
   IndexingConfig indexing;   // must match the store's (checked at open)
 };
 
-// A map to insert with its descriptor (computed by the caller, outside locks).
+// A map to insert with its descriptor and place features (computed by the
+// caller, outside locks).
 struct MapWrite {
   v1::StoredMap map;
   Lmd lmd;
+  PlaceFeatures place;
+  uint64_t index_id = 0;  // set by InsertMaps: the map's id inside its collection's indexes
+};
+
+// A stored map as the default method's indexes know it.
+struct IndexedEntry {
+  std::string map_id;
+  double heading = 0.0;  // its place features' compass heading
 };
 
 // A retrieved map: its id in the collection and the index's hit.
@@ -126,6 +138,19 @@ class MapStore {
   Result<std::vector<StoreHit>> Retrieve(const std::string& collection, const Lmd& query,
                                          const RetrieveOptions& options, RetrieveStats* stats = nullptr) const;
 
+  // The default method's first stage over the collection (PlaceIndex::Search
+  // on index ids); maps whose id is in `excluded` are never returned.
+  // NotFound for an unknown collection.
+  Result<std::vector<PlaceHypothesis>> SearchPlaces(const std::string& collection, const PlaceFeatures& query,
+                                                    const PlaceSearchOptions& options,
+                                                    const std::unordered_set<std::string>& excluded,
+                                                    PlaceSearchStats* stats = nullptr) const;
+  // The map behind an index id; NotFound once it is no longer stored.
+  Result<IndexedEntry> Indexed(const std::string& collection, uint64_t index_id) const;
+  // Its place on its robot's route (metadata robot_id and sequence, when
+  // both are set: a sequence of 0 counts as unset); false if unknown.
+  bool RouteOf(const std::string& collection, uint64_t index_id, MapSource::Route* route) const;
+
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in
   // bytes. InvalidArgument if the directory exists; IoError on failure.
@@ -143,6 +168,10 @@ class MapStore {
   Status CheckMeta(const std::string& data_dir);
   Status LoadCollections();
   Status RebuildIndexes();
+  // Place features of a descriptor record: decoded, or computed again from
+  // the stored map when the record has none of this build's version (*stale
+  // is then set, so that the caller writes them back).
+  Result<PlaceFeatures> PlaceFeaturesOf(const std::string& key, const internal::IndexedMap& indexed, bool* stale) const;
   // The state of a collection, or nullptr. States are never removed, so the
   // pointer stays valid while the store is open. The caller holds
   // collections_mutex_ (shared) or write_mutex_.

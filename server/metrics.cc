@@ -1,5 +1,7 @@
 #include "server/metrics.h"
 
+#include <ctime>
+
 #include <cmath>
 #include <sstream>
 
@@ -60,14 +62,17 @@ std::vector<v1::MethodStats> CallMetrics::Snapshot() const {
   return out;
 }
 
-void CallMetrics::RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read,
-                                  uint64_t hits_verified, bool reduced_depth) {
+double ProcessCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+
+void CallMetrics::RecordQueryWork(uint64_t features_compared, uint64_t maps_matched, bool reduced_depth) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++work_.queries;
-  work_.maps_touched += maps_touched;
-  work_.maps_scored += maps_scored;
-  work_.postings_read += postings_read;
-  work_.hits_verified += hits_verified;
+  work_.features_compared += features_compared;
+  work_.maps_matched += maps_matched;
   work_.reduced_depth += reduced_depth;
 }
 
@@ -78,10 +83,12 @@ void CallMetrics::RecordEvicted(uint64_t maps) {
 }
 
 std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
-                                        const VerifierCache& verifier) const {
+                                        const PreparedCache& prepared, double cpu_seconds) const {
   std::ostringstream out;
   out << "# HELP lmd_uptime_seconds Seconds since lmdd started.\n# TYPE lmd_uptime_seconds gauge\n"
       << "lmd_uptime_seconds " << uptime_s << "\n";
+  out << "# HELP process_cpu_seconds_total CPU time lmdd has used (user + system).\n"
+      << "# TYPE process_cpu_seconds_total counter\nprocess_cpu_seconds_total " << cpu_seconds << "\n";
   out << "# HELP lmd_collection_maps Stored maps per collection.\n# TYPE lmd_collection_maps gauge\n";
   for (const auto& c : collections) out << "lmd_collection_maps{collection=\"" << c.name() << "\"} " << c.maps() << "\n";
   out << "# HELP lmd_collection_postings Index postings per collection.\n# TYPE lmd_collection_postings gauge\n";
@@ -112,20 +119,18 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
   auto counter = [&](const char* name, const char* help, uint64_t value) {
     out << "# HELP " << name << " " << help << "\n# TYPE " << name << " counter\n" << name << " " << value << "\n";
   };
-  counter("lmd_queries_total", "Retrieve and DetectChanges queries that reached the index.", work_.queries);
-  counter("lmd_query_maps_touched_total", "Stored maps with a posting read, summed over queries.", work_.maps_touched);
-  counter("lmd_query_maps_scored_total", "Stored maps scored exactly by the kernel, summed over queries.",
-          work_.maps_scored);
-  counter("lmd_query_postings_read_total", "Index postings read, summed over queries.", work_.postings_read);
-  counter("lmd_query_hits_verified_total", "Hits verified by scan matching, summed over queries.", work_.hits_verified);
+  counter("lmd_queries_total", "Default-method Retrieve and DetectChanges queries.", work_.queries);
+  counter("lmd_query_features_compared_total", "Stored place features the first stage compared, summed over queries.",
+          work_.features_compared);
+  counter("lmd_query_maps_matched_total", "Stored maps scan matched, summed over queries.", work_.maps_matched);
   counter("lmd_maps_evicted_total", "Maps deleted to keep a collection within retain_maps_per_collection.",
           maps_evicted_);
   counter("lmd_queries_reduced_depth_total", "Queries answered at the busy depth because calls were waiting.",
           work_.reduced_depth);
-  counter("lmd_maps_prepared_total", "Maps prepared for scan matching (misses of the prepared-map cache).",
-          verifier.maps_prepared);
+  counter("lmd_maps_prepared_total", "Hits prepared for scan matching (misses of the prepared-map cache).",
+          prepared.misses);
   out << "# HELP lmd_prepared_cache_bytes Bytes held by the prepared-map cache (prepared_map_cache_mb).\n"
-      << "# TYPE lmd_prepared_cache_bytes gauge\nlmd_prepared_cache_bytes " << verifier.bytes << "\n";
+      << "# TYPE lmd_prepared_cache_bytes gauge\nlmd_prepared_cache_bytes " << prepared.bytes << "\n";
   return out.str();
 }
 

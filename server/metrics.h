@@ -14,19 +14,20 @@
 
 namespace lmd::server {
 
+// CPU time the process has used since start, s (all threads).
+double ProcessCpuSeconds();
+
 class CallMetrics {
  public:
   // Records one finished call. `code` is the gRPC status code (0 = OK).
   void Record(const std::string& method, int code, double latency_ms);
 
-  // Records the work of one query (Retrieve or DetectChanges) that reached
-  // the index: maps with a posting read, maps scored exactly, postings read
-  // (core/index/index.h RetrieveStats), hits verified by scan matching, and
-  // whether the server was busy and reduced the query's depth. Exported as
-  // Prometheus counters, so that an operator sees what max_maps_scored and
-  // verify_candidates cost, and how often load reduced them.
-  void RecordQueryWork(uint64_t maps_touched, uint64_t maps_scored, uint64_t postings_read, uint64_t hits_verified,
-                       bool reduced_depth);
+  // Records the work of one default-method query (Retrieve or
+  // DetectChanges): stored features the first stage compared, maps scan
+  // matched, and whether the server was busy and reduced the query's depth.
+  // Exported as Prometheus counters, so that an operator sees what
+  // verify_candidates costs and how often load reduced it.
+  void RecordQueryWork(uint64_t features_compared, uint64_t maps_matched, bool reduced_depth);
 
   // Records maps deleted to keep a collection within its cap.
   void RecordEvicted(uint64_t maps);
@@ -35,17 +36,17 @@ class CallMetrics {
   // Percentiles are bucket upper bounds: within 10 % of the true value.
   std::vector<v1::MethodStats> Snapshot() const;
 
-  // What the hit verifier's cache of prepared maps did (server/hit_verifier.h).
-  struct VerifierCache {
-    uint64_t maps_prepared = 0;  // preparations since start (cache misses)
-    uint64_t bytes = 0;          // bytes held now
+  // What the cache of prepared maps did (server/prepared_maps.h).
+  struct PreparedCache {
+    uint64_t misses = 0;  // maps prepared on a hit since start
+    uint64_t bytes = 0;   // bytes held now
   };
 
   // Prometheus text exposition (version 0.0.4) of the calls, of
-  // `collections` (maps, points, postings per collection) and of the
-  // verifier's cache.
+  // `collections` (maps, points, postings per collection), of the prepared
+  // maps' cache and of the process's CPU time.
   std::string PrometheusText(const std::vector<v1::CollectionInfo>& collections, double uptime_s,
-                             const VerifierCache& verifier) const;
+                             const PreparedCache& prepared, double cpu_seconds) const;
 
  private:
   // Latency buckets grow by 10 %: bucket i holds latencies up to
@@ -63,8 +64,7 @@ class CallMetrics {
   static double Percentile(const Method& method, double q);
 
   struct QueryWork {
-    uint64_t queries = 0, maps_touched = 0, maps_scored = 0, postings_read = 0, hits_verified = 0;
-    uint64_t reduced_depth = 0;
+    uint64_t queries = 0, features_compared = 0, maps_matched = 0, reduced_depth = 0;
   };
 
   mutable std::mutex mutex_;

@@ -123,8 +123,8 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
     const MapStore* store_ptr = server->store_.get();
     const CallMetrics* metrics = server->metrics_.get();
     Result<std::unique_ptr<MetricsHttpServer>> http = MetricsHttpServer::Start(config.metrics_listen, [=] {
-      const CallMetrics::VerifierCache cache{service->verifier().maps_prepared(), service->verifier().cached_bytes()};
-      return metrics->PrometheusText(store_ptr->ListCollections(), service->uptime_s(), cache);
+      const CallMetrics::PreparedCache cache{service->prepared_maps().misses(), service->prepared_maps().bytes()};
+      return metrics->PrometheusText(store_ptr->ListCollections(), service->uptime_s(), cache, ProcessCpuSeconds());
     });
     if (!http.ok()) {
       server->Shutdown(std::chrono::milliseconds(0));

@@ -12,5 +12,7 @@ int RunRender(int argc, char** argv);
 int RunRetrieval(int argc, char** argv);
 // lmd-eval export --log FILE... --out DIR
 int RunExport(int argc, char** argv);
+// lmd-eval served [--log FILE...] [--out DIR] [--server HOST:PORT | --lmdd PATH] [--max-queries N] ...
+int RunServed(int argc, char** argv);
 
 }  // namespace lmd::eval

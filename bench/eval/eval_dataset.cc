@@ -82,13 +82,25 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
     grids[i] = PointGrid(global[i], options.place_radius_m);
   });
 
-  d.queries.resize(pairs.size());
+  std::vector<RelevantPair> asked = pairs;
+  if (options.every_map) {
+    std::vector<RelevantPair> all;
+    size_t next = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (d.maps[i].points.empty()) continue;
+      while (next < pairs.size() && pairs[next].query < i) ++next;
+      all.push_back(next < pairs.size() && pairs[next].query == i ? pairs[next]
+                                                                  : RelevantPair{i, kNoRelevant, 0.0, 0});
+    }
+    asked = std::move(all);
+  }
+  d.queries.resize(asked.size());
   const uint64_t base = options.seed * 0x9E3779B97F4A7C15ULL ^ Fnv1a(d.name);
-  ProgressBar bar(d.name + ": ground truth and changes", pairs.size());
+  ProgressBar bar(d.name + ": ground truth and changes", asked.size());
   std::atomic<size_t> done{0};
   std::mutex bar_mutex;
-  ParallelFor(pairs.size(), options.threads, [&](size_t k) {
-    const RelevantPair& p = pairs[k];
+  ParallelFor(asked.size(), options.threads, [&](size_t k) {
+    const RelevantPair& p = asked[k];
     EvalQuery& q = d.queries[k];
     q.map = p.query, q.relevant = p.relevant, q.mean_dist_m = p.mean_dist_m;
     const LocalMap& qm = d.maps[p.query];

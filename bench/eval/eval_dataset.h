@@ -20,9 +20,12 @@ namespace lmd::eval {
 // Runs fn(i) for i in [0, n) on `threads` threads (>= 1), dynamic schedule.
 void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 
+// No relevant map (EvalQuery::relevant): the query's place was not revisited.
+inline constexpr size_t kNoRelevant = static_cast<size_t>(-1);
+
 struct EvalQuery {
   size_t map = 0;                 // index of the query map
-  size_t relevant = 0;            // index of its relevant map (paper's scoring)
+  size_t relevant = kNoRelevant;  // index of its relevant map (paper's scoring)
   double mean_dist_m = 0.0;       // ground truth mean distance to it
   std::vector<size_t> candidates; // valid candidates (> 10 m of travel away), ascending
   std::vector<size_t> places;     // candidates showing the query's place (overlap >= 0.5), ascending
@@ -34,7 +37,7 @@ struct EvalQuery {
 struct Dataset {
   std::string name;
   std::vector<LocalMap> maps;
-  std::vector<EvalQuery> queries;  // one per relevant pair, sorted by query map
+  std::vector<EvalQuery> queries;  // one per relevant pair (or every map), sorted by query map
   double load_seconds = 0.0;
 
   // Pose of the query's own frame in map db's own frame (ground truth).
@@ -47,6 +50,10 @@ struct DatasetOptions {
   double place_radius_m = 0.3;    // place truth: query points within this of the map's
   double place_min_overlap = 0.5; //   ... at least this fraction
   int threads = 2;
+  // false: the paper's queries, one per relevant pair; true: every map with
+  // points (the served protocol: a robot cannot know whether its place was
+  // revisited, so queries without a relevant map are asked too).
+  bool every_map = false;
 };
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

@@ -23,6 +23,12 @@ void Usage(std::FILE* out) {
                "      --ablations also best with one option changed per row; writes DIR/results.json,\n"
                "      DIR/report.md and SVG plots (default DIR: out/retrieval). best verifies deeply: all\n"
                "      queries of the nine logs take about 36 min on 2 cores, --max-queries 25 about 3.5 min.\n"
+               "  served [--log FILE...] [--out DIR] [--server HOST:PORT | --lmdd PATH] [--seed N]\n"
+               "         [--max-queries N] [--threads N] [--verify N] [--tuned-on a,b] [--no-changes]\n"
+               "      the protocol through a live lmdd (started on a temporary store unless --server): every\n"
+               "      map inserted, then queried with its 10 m neighbours excluded (Retrieve) and with a\n"
+               "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv and\n"
+               "      served.svg (default DIR: out/served). The nine logs take about 10 min on 2 cores.\n"
                "  export --log FILE... --out DIR\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
 }
@@ -39,6 +45,7 @@ int main(int argc, char** argv) {
   if (command == "render") return lmd::eval::RunRender(argc - 2, argv + 2);
   if (command == "retrieval") return lmd::eval::RunRetrieval(argc - 2, argv + 2);
   if (command == "export") return lmd::eval::RunExport(argc - 2, argv + 2);
+  if (command == "served") return lmd::eval::RunServed(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);
   return 2;

@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <random>
 #include <utility>
 
 #include "core/util/full_turn_angle.h"
+#include "core/util/gaussian_matrix.h"
 #include "core/viewpoint/viewpoint.h"
 
 namespace lmd {
@@ -151,17 +151,10 @@ void Collapse(const std::vector<double>& fine, int shells, int sectors, int k, s
   }
 }
 
-// B x D Gaussian matrix, row-major, from the seed (Box-Muller on 53-bit uniforms).
+// B x D Gaussian matrix, row-major, from the seed.
 std::vector<double> ProjectionMatrix(uint64_t seed, int bits, int dims) {
-  std::mt19937_64 rng(seed ^ (0x9e3779b97f4a7c15ULL * (static_cast<uint64_t>(dims) * 64 + bits + kProjectionVersion)));
-  auto uniform = [&] { return (static_cast<double>(rng() >> 11) + 0.5) * (1.0 / 9007199254740992.0); };
-  std::vector<double> m(static_cast<size_t>(bits) * dims);
-  for (size_t i = 0; i < m.size(); i += 2) {
-    const double r = std::sqrt(-2.0 * std::log(uniform())), t = 2 * M_PI * uniform();
-    m[i] = r * std::cos(t);
-    if (i + 1 < m.size()) m[i + 1] = r * std::sin(t);
-  }
-  return m;
+  return GaussianValues(seed ^ (0x9e3779b97f4a7c15ULL * (static_cast<uint64_t>(dims) * 64 + bits + kProjectionVersion)),
+                        static_cast<size_t>(bits) * dims);
 }
 
 // sign(W h): h is NOT centred, so that the common near-flat profiles (a

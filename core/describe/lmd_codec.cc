@@ -4,23 +4,14 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/util/byte_codec.h"
+
 namespace lmd {
 namespace {
 
 constexpr size_t kFeatureBytesV1 = 14;
 constexpr size_t kFeatureBytesV2 = 16;
 constexpr uint16_t kNoInnerWord = 0xFFFF;
-
-void PutU16(std::string& out, uint16_t v) {
-  out.push_back(static_cast<char>(v & 0xff));
-  out.push_back(static_cast<char>(v >> 8));
-}
-
-void PutF32(std::string& out, float f) {
-  uint32_t v;
-  std::memcpy(&v, &f, 4);
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
-}
 
 int16_t Quantise(float v) {
   const double q = std::round(static_cast<double>(v) / kLmdPositionQuantumM);
@@ -30,52 +21,6 @@ int16_t Quantise(float v) {
   return static_cast<int16_t>(q);
 }
 
-class Reader {
- public:
-  explicit Reader(const std::string& s) : p_(reinterpret_cast<const uint8_t*>(s.data())), left_(s.size()) {}
-  size_t left() const { return left_; }
-  bool U8(uint8_t* v) {
-    if (left_ < 1) return false;
-    *v = *p_++, --left_;
-    return true;
-  }
-  bool U16(uint16_t* v) {
-    if (left_ < 2) return false;
-    *v = static_cast<uint16_t>(p_[0] | (p_[1] << 8));
-    p_ += 2, left_ -= 2;
-    return true;
-  }
-  bool U64(uint64_t* v) {
-    if (left_ < 8) return false;
-    *v = 0;
-    for (int i = 7; i >= 0; --i) *v = (*v << 8) | p_[i];
-    p_ += 8, left_ -= 8;
-    return true;
-  }
-  bool F32(float* f) {
-    if (left_ < 4) return false;
-    const uint32_t v = static_cast<uint32_t>(p_[0]) | (static_cast<uint32_t>(p_[1]) << 8) |
-                       (static_cast<uint32_t>(p_[2]) << 16) | (static_cast<uint32_t>(p_[3]) << 24);
-    std::memcpy(f, &v, 4);
-    p_ += 4, left_ -= 4;
-    return true;
-  }
-  bool Varint(uint64_t* v) {
-    *v = 0;
-    for (int shift = 0; shift < 64; shift += 7) {
-      uint8_t b;
-      if (!U8(&b)) return false;
-      *v |= static_cast<uint64_t>(b & 0x7f) << shift;
-      if (!(b & 0x80)) return true;
-    }
-    return false;
-  }
-
- private:
-  const uint8_t* p_;
-  size_t left_;
-};
-
 }  // namespace
 
 std::string EncodeLmd(const Lmd& lmd) {
@@ -84,13 +29,7 @@ std::string EncodeLmd(const Lmd& lmd) {
                                  [](const Feature& f) { return f.inner_word != kNoWord; });
   out.reserve(16 + (inner ? kFeatureBytesV2 : kFeatureBytesV1) * lmd.features.size());
   out.push_back(static_cast<char>(inner ? 2 : 1));
-  for (uint64_t n = lmd.features.size();; n >>= 7) {
-    if (n < 0x80) {
-      out.push_back(static_cast<char>(n));
-      break;
-    }
-    out.push_back(static_cast<char>((n & 0x7f) | 0x80));
-  }
+  PutVarint(out, lmd.features.size());
   PutF32(out, static_cast<float>(lmd.frame.origin.x));
   PutF32(out, static_cast<float>(lmd.frame.origin.y));
   PutF32(out, static_cast<float>(lmd.frame.heading));
@@ -99,14 +38,13 @@ std::string EncodeLmd(const Lmd& lmd) {
     PutU16(out, static_cast<uint16_t>(Quantise(f.y)));
     PutU16(out, static_cast<uint16_t>(f.appearance_word & 0xffff));
     if (inner) PutU16(out, f.inner_word == kNoWord ? kNoInnerWord : static_cast<uint16_t>(f.inner_word & 0x7fff));
-    const uint64_t cw = f.change_word & ((uint64_t{1} << 60) - 1);
-    for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((cw >> (8 * i)) & 0xff));
+    PutU64(out, f.change_word & ((uint64_t{1} << 60) - 1));
   }
   return out;
 }
 
 Result<Lmd> DecodeLmd(const std::string& bytes) {
-  Reader r(bytes);
+  ByteReader r(bytes);
   uint8_t version;
   if (!r.U8(&version)) return Status::Corruption("lmd: empty record");
   if (version != 1 && version != 2) {

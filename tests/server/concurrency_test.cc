@@ -49,7 +49,7 @@ TEST(ConcurrencyTest, ConcurrentRobotsMatchASerialReplay) {
         v1::RetrieveResponse found;
         status = concurrent.client().Retrieve(QueryFor(map), &found);
         if (!status.ok() || found.hits_size() == 0 || found.hits(0).map_id() != map.id) {
-          failures[r].push_back("query " + map.id + " did not find itself first");
+          failures[r].push_back("query " + map.id + " did not find itself first: " + (found.hits_size() ? found.hits(0).map_id() + " " + std::to_string(found.hits(0).score()) : std::string("no hit")) + (found.hits_size() > 1 ? " / " + found.hits(1).map_id() + " " + std::to_string(found.hits(1).score()) : std::string()));
         }
       }
     });

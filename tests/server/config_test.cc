@@ -14,21 +14,18 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   testing::TempDir dir;
   const std::string path = dir.path() + "/lmdd.conf";
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
-                      << "verify_enough_matches = 3\nmax_maps_scored = 64\nprepared_map_cache_mb = 32\n"
-                      << "bound_skip_postings_per_map = 0\nbusy_queued_calls = 4\nbusy_verify_candidates = 2\n"
-                      << "busy_max_maps_scored = 30\nretain_maps_per_collection = 5000\n";
+                      << "verify_candidates = 12\nprepared_map_cache_mb = 32\n"
+                      << "busy_queued_calls = 4\nbusy_verify_candidates = 2\n"
+                      << "retain_maps_per_collection = 5000\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
   EXPECT_EQ(config.listen, "127.0.0.1:6000");
   EXPECT_EQ(config.max_top_k, 50u);
   EXPECT_TRUE(config.sync_writes);
-  EXPECT_EQ(config.verify_enough_matches, 3u);
+  EXPECT_EQ(config.verify_candidates, 12u);
   EXPECT_EQ(config.prepared_map_cache_mb, 32u);
-  EXPECT_EQ(config.max_maps_scored, 64u);
-  EXPECT_EQ(config.bound_skip_postings_per_map, 0.0);
   EXPECT_EQ(config.busy_queued_calls, 4u);
   EXPECT_EQ(config.busy_verify_candidates, 2u);
-  EXPECT_EQ(config.busy_max_maps_scored, 30u);
   EXPECT_EQ(config.retain_maps_per_collection, 5000u);
 }
 
@@ -44,16 +41,14 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_FALSE(SetConfigValue("max_top_k", "-3", &config).ok());
   EXPECT_FALSE(SetConfigValue("max_top_k", "ten", &config).ok());
   EXPECT_FALSE(SetConfigValue("sync_writes", "maybe", &config).ok());
-  EXPECT_FALSE(SetConfigValue("reverse_conflict_weight", "-1", &config).ok());
   EXPECT_NE(SetConfigValue("prepared_map_cache_entries", "500", &config).message().find("prepared_map_cache_mb"),
             std::string::npos);
-  EXPECT_FALSE(SetConfigValue("default_max_offset_m", "0", &config).ok());
+  // Settings of the old default method say they are gone (a config file naming them is refused).
+  EXPECT_NE(SetConfigValue("max_maps_scored", "150", &config).message().find("removed"), std::string::npos);
   // A limit of 0 would refuse every request.
   EXPECT_FALSE(SetConfigValue("max_top_k", "0", &config).ok());
   EXPECT_FALSE(SetConfigValue("max_message_bytes", "0", &config).ok());
   EXPECT_FALSE(SetConfigValue("max_map_extent_m", "2000", &config).ok());  // beyond the pose words' reach
-  ASSERT_TRUE(SetConfigValue("reverse_conflict_weight", "4", &config).ok());
-  EXPECT_EQ(config.reverse_conflict_weight, 4.0);
   EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);
 }
 

@@ -1,0 +1,118 @@
+#include "bench/eval/answer_scoring.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/eval/retrieval_metrics.h"
+
+namespace lmd::eval {
+
+AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& answer, bool changed) {
+  AnswerOutcome o;
+  o.place_counted = !q.places.empty();
+  for (size_t i = 0; i < answer.hits.size(); ++i) {
+    if (d.ShowsPlace(q, answer.hits[i].db)) {
+      o.first_place_hit = static_cast<int>(i);
+      break;
+    }
+  }
+  if (o.first_place_hit == 0) {
+    o.pose_known = true;
+    PoseError(answer.hits[0].pose, d.TruePose(q.map, answer.hits[0].db), &o.pose_err_m, &o.pose_err_deg);
+  }
+  o.localized = answer.localized;
+  o.localized_right = o.localized && o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
+  o.confidence = answer.confidence;
+  o.change_task = changed && q.change_ok && o.place_counted;
+  if (changed) {
+    for (size_t r = 0; r < answer.masks.size(); ++r) {
+      const Answer::Mask& m = answer.masks[r];
+      const bool finds = q.change_ok && d.ShowsPlace(q, m.db) && MaskHitsChange(m.points, q.changed_points, kMaskHitM);
+      if (finds && o.first_change_mask == 0) o.first_change_mask = r + 1;
+      o.false_masks += !finds;
+    }
+    o.masks = answer.masks.size();
+  }
+  o.cpu_ms = answer.cpu_ms;
+  o.wall_ms = answer.wall_ms;
+  return o;
+}
+
+AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
+  AnswerSummary s;
+  s.queries = outcomes.size();
+  size_t at1 = 0, at5 = 0, change_ok = 0;
+  std::vector<double> err_m, err_deg, cpu, wall;
+  for (const AnswerOutcome& o : outcomes) {
+    if (o.place_counted) {
+      ++s.place_queries;
+      at1 += o.first_place_hit == 0;
+      at5 += o.first_place_hit >= 0 && o.first_place_hit < 5;
+    }
+    if (o.pose_known) err_m.push_back(o.pose_err_m), err_deg.push_back(o.pose_err_deg);
+    s.localized += o.localized;
+    s.localized_wrong += o.localized && !o.localized_right;
+    if (o.change_task) {
+      ++s.change_tasks;
+      change_ok += o.first_change_mask == 1;
+    }
+    s.masks += o.masks, s.false_masks += o.false_masks;
+    cpu.push_back(o.cpu_ms), wall.push_back(o.wall_ms);
+  }
+  auto rate = [](size_t n, size_t of) { return of ? static_cast<double>(n) / static_cast<double>(of) : 0.0; };
+  s.place_at_1 = rate(at1, s.place_queries);
+  s.place_at_5 = rate(at5, s.place_queries);
+  s.pose_count = err_m.size();
+  s.pose_err_m_median = Quantile(err_m, 0.5), s.pose_err_m_p90 = Quantile(err_m, 0.9);
+  s.pose_err_deg_median = Quantile(err_deg, 0.5), s.pose_err_deg_p90 = Quantile(err_deg, 0.9);
+  s.localized_share = rate(s.localized, s.queries);
+  s.localized_precision = s.localized ? 1.0 - rate(s.localized_wrong, s.localized) : 1.0;
+  s.change_success_at_1 = rate(change_ok, s.change_tasks);
+  s.false_mask_share = rate(s.false_masks, s.masks);
+  s.cpu_ms_p50 = Quantile(cpu, 0.5), s.cpu_ms_p99 = Quantile(cpu, 0.99);
+  double total = 0;
+  for (double c : cpu) total += c;
+  s.cpu_ms_mean = cpu.empty() ? 0.0 : total / static_cast<double>(cpu.size());
+  s.wall_ms_p50 = Quantile(wall, 0.5), s.wall_ms_p99 = Quantile(wall, 0.99);
+  return s;
+}
+
+AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
+  AnswerSummary m;
+  if (logs.empty()) return m;
+  m.localized_precision = 0.0;
+  const double n = static_cast<double>(logs.size());
+  for (const AnswerSummary& s : logs) {
+    m.queries += s.queries, m.place_queries += s.place_queries, m.pose_count += s.pose_count;
+    m.localized += s.localized, m.localized_wrong += s.localized_wrong, m.change_tasks += s.change_tasks;
+    m.masks += s.masks, m.false_masks += s.false_masks;
+    m.place_at_1 += s.place_at_1 / n, m.place_at_5 += s.place_at_5 / n;
+    m.pose_err_m_median += s.pose_err_m_median / n, m.pose_err_m_p90 += s.pose_err_m_p90 / n;
+    m.pose_err_deg_median += s.pose_err_deg_median / n, m.pose_err_deg_p90 += s.pose_err_deg_p90 / n;
+    m.localized_share += s.localized_share / n, m.localized_precision += s.localized_precision / n;
+    m.change_success_at_1 += s.change_success_at_1 / n, m.false_mask_share += s.false_mask_share / n;
+    m.cpu_ms_p50 += s.cpu_ms_p50 / n, m.cpu_ms_p99 += s.cpu_ms_p99 / n, m.cpu_ms_mean += s.cpu_ms_mean / n;
+    m.wall_ms_p50 += s.wall_ms_p50 / n, m.wall_ms_p99 += s.wall_ms_p99 / n;
+  }
+  return m;
+}
+
+std::string SummaryJson(const AnswerSummary& s) {
+  char buf[1400];
+  std::snprintf(buf, sizeof buf,
+                "{\"queries\": %zu, \"place_queries\": %zu, \"place_at_1\": %.4f, \"place_at_5\": %.4f, "
+                "\"pose_count\": %zu, \"pose_err_m_median\": %.4f, \"pose_err_m_p90\": %.4f, "
+                "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"localized\": %zu, "
+                "\"localized_share\": %.4f, \"localized_wrong\": %zu, \"localized_precision\": %.4f, "
+                "\"change_tasks\": %zu, \"change_success_at_1\": %.4f, \"masks\": %zu, \"false_masks\": %zu, "
+                "\"false_mask_share\": %.4f, \"cpu_ms_p50\": %.3f, \"cpu_ms_p99\": %.3f, \"cpu_ms_mean\": %.3f, "
+                "\"wall_ms_p50\": %.3f, \"wall_ms_p99\": %.3f}",
+                s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
+                s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.localized, s.localized_share,
+                s.localized_wrong, s.localized_precision, s.change_tasks, s.change_success_at_1, s.masks,
+                s.false_masks, s.false_mask_share, s.cpu_ms_p50, s.cpu_ms_p99, s.cpu_ms_mean, s.wall_ms_p50,
+                s.wall_ms_p99);
+  return buf;
+}
+
+}  // namespace lmd::eval

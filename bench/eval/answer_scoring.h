@@ -1,0 +1,82 @@
+// Scoring of the localisation pipeline's answers (core/localize), the same
+// whether they come from lmd-eval's own run (`retrieval`, method best) or
+// from a live lmdd (`served`): place recall, the metric pose, whether lmdd
+// was sure and right, change masks, and cost.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "bench/eval/eval_dataset.h"
+#include "core/types.h"
+
+namespace lmd::eval {
+
+// A "sure" answer counts as right when the top hit shows the query's place
+// and its pose is this close to the truth.
+inline constexpr double kSurePoseM = 0.2;
+inline constexpr double kSurePoseDeg = 1.0;
+// A change mask finds the change when one of its points is this close to a
+// changed point (and its hit shows the place).
+inline constexpr double kMaskHitM = 0.5;
+
+// One answer, in the dataset's map indices.
+struct Answer {
+  struct Hit {
+    size_t db = 0;
+    Pose2 pose;  // query own frame in the db map's own frame
+  };
+  struct Mask {
+    size_t db = 0;  // the hit it is credited to
+    std::vector<Point2> points;  // query own frame
+  };
+  std::vector<Hit> hits;    // best first
+  bool localized = false;   // the verdict
+  double confidence = 0.0;
+  std::vector<Mask> masks;  // best first
+  double cpu_ms = 0.0;      // lmdd's (or the pipeline's) CPU on this query
+  double wall_ms = 0.0;
+};
+
+struct AnswerOutcome {
+  bool place_counted = false;  // a candidate shows the query's place
+  int first_place_hit = -1;    // position of the first hit showing it; -1 = none
+  bool pose_known = false;     // the top hit shows the place
+  double pose_err_m = 0.0, pose_err_deg = 0.0;
+  bool localized = false;
+  bool localized_right = false;  // localized, top hit shows the place, pose within kSurePose*
+  double confidence = 0.0;
+  bool change_task = false;      // the query carried a simulated change (and has a place)
+  size_t first_change_mask = 0;  // 1-based rank of the first mask that finds it; 0 = none
+  size_t masks = 0, false_masks = 0;  // masks returned; of them, those that find no change of a right hit
+  double cpu_ms = 0.0, wall_ms = 0.0;
+};
+
+// `changed`: the answer is to the query's changed copy (q.changed).
+AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& answer, bool changed);
+
+struct AnswerSummary {
+  size_t queries = 0, place_queries = 0;
+  double place_at_1 = 0.0, place_at_5 = 0.0;
+  size_t pose_count = 0;
+  double pose_err_m_median = 0.0, pose_err_m_p90 = 0.0, pose_err_deg_median = 0.0, pose_err_deg_p90 = 0.0;
+  double localized_share = 0.0;      // of all queries
+  double localized_precision = 1.0;  // right among localized answers (1 when none)
+  size_t localized = 0, localized_wrong = 0;
+  size_t change_tasks = 0;
+  double change_success_at_1 = 0.0;  // of change tasks: the top mask finds the change
+  size_t masks = 0, false_masks = 0;
+  double false_mask_share = 0.0;     // of all masks returned
+  double cpu_ms_p50 = 0.0, cpu_ms_p99 = 0.0, cpu_ms_mean = 0.0;
+  double wall_ms_p50 = 0.0, wall_ms_p99 = 0.0;
+};
+
+AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes);
+// Each field's mean over the summaries (each log weighs the same); counts summed.
+AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs);
+
+// JSON object of a summary (no trailing newline).
+std::string SummaryJson(const AnswerSummary& s);
+
+}  // namespace lmd::eval

@@ -1,0 +1,163 @@
+#include "bench/eval/served_report.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "core/render/svg_writer.h"
+
+namespace lmd::eval {
+namespace {
+
+constexpr char kCsvHeader[] =
+    "log,query,place_counted,first_place_hit,pose_err_m,pose_err_deg,localized,localized_right,confidence,"
+    "best_score,rival_score,agreeing,cpu_ms,wall_ms,changed_localized,first_change_mask,masks,false_masks,"
+    "changed_best_score,changed_rival_score,changed_cpu_ms\n";
+
+struct Group {
+  std::string label;
+  AnswerSummary still, changed;
+  size_t logs = 0;
+};
+
+std::vector<Group> Means(const ServedRun& run) {
+  std::vector<AnswerSummary> all_s, all_c, tuned_s, tuned_c, held_s, held_c;
+  std::string tuned_names, held_names;
+  for (const ServedLog& log : run.logs) {
+    const bool tuned = std::find(run.tuned_on.begin(), run.tuned_on.end(), log.name) != run.tuned_on.end();
+    (tuned ? tuned_s : held_s).push_back(log.still);
+    (tuned ? tuned_c : held_c).push_back(log.changed);
+    std::string& names = tuned ? tuned_names : held_names;
+    names += (names.empty() ? "" : ", ") + log.name;
+    all_s.push_back(log.still), all_c.push_back(log.changed);
+  }
+  std::vector<Group> out;
+  if (!held_s.empty()) out.push_back({"mean, held out (" + held_names + ")", MeanOverLogs(held_s), MeanOverLogs(held_c), held_s.size()});
+  if (!tuned_s.empty()) out.push_back({"mean, tuned on (" + tuned_names + ")", MeanOverLogs(tuned_s), MeanOverLogs(tuned_c), tuned_s.size()});
+  out.push_back({"mean, all logs", MeanOverLogs(all_s), MeanOverLogs(all_c), all_s.size()});
+  return out;
+}
+
+std::string Row(const std::string& label, const std::string& maps, const AnswerSummary& s, const AnswerSummary& c,
+                bool with_changes) {
+  char buf[700];
+  std::snprintf(buf, sizeof buf,
+                "| %s | %s | %zu / %zu | %.3f | %.3f | %.1f / %.1f cm, %.2f / %.2f deg | %.3f | %.4f (%zu wrong) | "
+                "%.1f / %.1f | %.1f / %.1f |",
+                label.c_str(), maps.c_str(), s.place_queries, s.queries, s.place_at_1, s.place_at_5,
+                100 * s.pose_err_m_median, 100 * s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90,
+                s.localized_share, s.localized_precision, s.localized_wrong, s.cpu_ms_p50, s.cpu_ms_p99, s.wall_ms_p50,
+                s.wall_ms_p99);
+  std::string row = buf;
+  if (with_changes) {
+    std::snprintf(buf, sizeof buf, " %.3f (%zu) | %.3f (%zu of %zu) | %.3f / %.4f | %.1f / %.1f |",
+                  c.change_success_at_1, c.change_tasks, c.false_mask_share, c.false_masks, c.masks,
+                  c.localized_share, c.localized_precision, c.cpu_ms_p50, c.cpu_ms_p99);
+    row += buf;
+  }
+  return row + "\n";
+}
+
+std::string Markdown(const ServedRun& run, bool with_changes) {
+  std::string md = "# lmd-eval served\n\n";
+  md += "Command: `" + run.command + "`  \nDate: " + run.date + "  \n";
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "Run time %.0f s; lmdd CPU over the run %.0f s.\n\n", run.seconds, run.lmdd_cpu_seconds);
+  md += buf;
+  md += "Every map inserted in its own frame (trajectory, scans; robot = the log), then each sent back as a "
+        "query with the maps within 10 m of travel excluded. place@k over the queries with a place among their "
+        "candidates (>= 50 % of the query's points within 0.3 m of a hit's); pose error of right top hits "
+        "(median / p90); sure = lmdd said `localized`; right = top hit shows the place with its pose within "
+        "0.2 m and 1 deg (over all sure answers, queries without a place included); CPU = lmdd's per call "
+        "(server_cpu_ms, p50 / p99); wall = the client's, p50 / p99.";
+  if (with_changes) {
+    md += " Changes: DetectChanges of the map with a simulated change; top mask = share of change tasks "
+          "whose first mask finds the change; false = masks returned that find no change of a right hit.";
+  }
+  md += "\n\n| log | maps | with place / queries | place@1 | place@5 | pose error | sure | sure right | CPU ms | wall ms |";
+  if (with_changes) md += " change top mask (tasks) | false masks | changed: sure / right | changed CPU ms |";
+  md += "\n|---|---|---|---|---|---|---|---|---|---|";
+  if (with_changes) md += "---|---|---|---|";
+  md += "\n";
+  for (const ServedLog& log : run.logs) md += Row(log.name, std::to_string(log.maps), log.still, log.changed, with_changes);
+  for (const Group& g : Means(run)) md += Row("**" + g.label + "**", "", g.still, g.changed, with_changes);
+  return md;
+}
+
+std::string Json(const ServedRun& run, bool with_changes) {
+  std::string j = "{\n  \"command\": \"" + run.command + "\",\n  \"date\": \"" + run.date + "\",\n  \"tuned_on\": [";
+  for (size_t i = 0; i < run.tuned_on.size(); ++i) j += (i ? ", \"" : "\"") + run.tuned_on[i] + "\"";
+  j += "],\n  \"logs\": [\n";
+  for (size_t i = 0; i < run.logs.size(); ++i) {
+    const ServedLog& log = run.logs[i];
+    j += "    {\"name\": \"" + log.name + "\", \"maps\": " + std::to_string(log.maps) + ", \"still\": " +
+         SummaryJson(log.still);
+    if (with_changes) j += ", \"changed\": " + SummaryJson(log.changed);
+    j += i + 1 < run.logs.size() ? "},\n" : "}\n";
+  }
+  j += "  ],\n  \"means\": [\n";
+  const std::vector<Group> means = Means(run);
+  for (size_t i = 0; i < means.size(); ++i) {
+    j += "    {\"label\": \"" + means[i].label + "\", \"still\": " + SummaryJson(means[i].still);
+    if (with_changes) j += ", \"changed\": " + SummaryJson(means[i].changed);
+    j += i + 1 < means.size() ? "},\n" : "}\n";
+  }
+  return j + "  ]\n}\n";
+}
+
+// Bars per log: place@1, share of sure answers, precision of sure answers.
+std::string Svg(const ServedRun& run) {
+  const size_t n = run.logs.size();
+  const double group_w = 3.6, height = 1.0;
+  SvgWriter svg(-1.2, -0.35, std::max<double>(1.0, n) * group_w + 0.4, height + 0.25, 960);
+  const SvgStyle axis{"#444", 1.0, "none", 1.0, ""};
+  svg.Line({0, 0}, {n * group_w, 0}, axis);
+  for (double y : {0.5, 0.9, 1.0}) {
+    svg.Line({0, y}, {n * group_w, y}, SvgStyle{"#bbb", 0.5, "none", 1.0, "3 3"});
+    char label[16];
+    std::snprintf(label, sizeof label, "%.1f", y);
+    svg.Text({-0.15, y - 0.015}, label, 11, "#444", "end");
+  }
+  const char* colours[3] = {"#1f77b4", "#ff7f0e", "#2ca02c"};
+  const char* names[3] = {"place@1", "sure share", "sure right"};
+  for (size_t i = 0; i < n; ++i) {
+    const AnswerSummary& s = run.logs[i].still;
+    const double values[3] = {s.place_at_1, s.localized_share, s.localized_precision};
+    for (int b = 0; b < 3; ++b) {
+      const double x0 = i * group_w + 0.3 + b * 1.0;
+      svg.Rect(x0, 0, x0 + 0.9, values[b] * height, SvgStyle{"none", 0, colours[b], 1.0, ""});
+    }
+    svg.Text({i * group_w + 1.8, -0.12}, run.logs[i].name, 13, "black", "middle");
+  }
+  for (int b = 0; b < 3; ++b) {
+    svg.Rect(b * 3.2, -0.3, b * 3.2 + 0.3, -0.22, SvgStyle{"none", 0, colours[b], 1.0, ""});
+    svg.Text({b * 3.2 + 0.45, -0.3}, names[b], 12);
+  }
+  svg.TextPx(480, 16, "lmd-eval served: per log", 14, "black", "middle");
+  return svg.ToString();
+}
+
+}  // namespace
+
+Status WriteServedReport(const std::string& dir, const ServedRun& run, bool with_changes) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  auto write = [&](const std::string& name, const std::string& text) -> Status {
+    std::ofstream out(dir + "/" + name);
+    out << text;
+    return out ? Status::Ok() : Status::IoError("cannot write " + dir + "/" + name);
+  };
+  std::string csv = kCsvHeader;
+  for (const ServedLog& log : run.logs) csv += log.query_lines;
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"results.json", Json(run, with_changes)},
+                                   {"report.md", Markdown(run, with_changes)},
+                                   {"queries.csv", csv},
+                                   {"served.svg", Svg(run)}}) {
+    Status s = write(name, text);
+    if (!s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+}  // namespace lmd::eval

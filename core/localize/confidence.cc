@@ -1,0 +1,50 @@
+#include "core/localize/confidence.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/align/icp.h"
+#include "core/localmap/pose_ops.h"
+
+namespace lmd {
+namespace {
+
+// Share of `points` (frame B), moved by `pose` into frame A, that land in
+// A's observed free space and are not near one of A's points.
+double FreeSpaceShare(const std::vector<Point2>& points, const PreparedMap& a, const Pose2& pose) {
+  if (points.empty()) return 0.0;
+  return MeasureOverlap(points, a, pose, 0.3).conflict_fraction;
+}
+
+}  // namespace
+
+double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_in_a) {
+  return std::max(FreeSpaceShare(b.points, a, b_in_a), FreeSpaceShare(a.points, b, Inverse(b_in_a)));
+}
+
+Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options) {
+  Verdict v;
+  if (hits->empty() || (*hits)[0].map == nullptr) return v;
+  JudgedHit& best = (*hits)[0];
+  best.agrees_with_best = true;
+  v.best_score = best.score;
+  for (size_t i = 1; i < hits->size(); ++i) {
+    JudgedHit& h = (*hits)[i];
+    if (h.map == nullptr || h.score < best.score - options.agreement_window) continue;
+    // The query's pose in A and in B give B's frame in A's: A <- query <- B.
+    const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));
+    h.agrees_with_best = Disagreement(*best.map, *h.map, b_in_a) <= options.max_disagreement;
+    if (h.agrees_with_best) {
+      ++v.agreeing;
+    } else {
+      v.rival_score = std::max(v.rival_score, h.score);
+    }
+  }
+  const double margin = v.best_score - v.rival_score;
+  v.sure = v.best_score >= options.min_score && margin >= options.min_margin;
+  v.confidence = 1.0 / (1.0 + std::exp(-(options.bias + options.score_weight * v.best_score +
+                                         options.margin_weight * margin)));
+  return v;
+}
+
+}  // namespace lmd

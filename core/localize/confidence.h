@@ -1,0 +1,59 @@
+// Whether a localisation can be trusted. A robot that acts on a wrong pose
+// does worse than one that asks again, so "sure" needs the evidence to rule
+// out a look-alike: the best hit must explain the query well, and every hit
+// that disagrees with it (another place that also fits: a repeated room, a
+// corridor of the same width) must score clearly lower.
+//
+// Two hits agree when the poses the query has in them put each map's points
+// where the other map saw them or did not look, not where it saw free space:
+// with T the pose of hit B's frame in hit A's frame that the two matches
+// imply, at most max_disagreement of B's points (under T) land in A's free
+// space and of A's points (under T^-1) in B's. Maps of one place agree; a
+// look-alike puts walls through the other map's rooms. Maps that do not
+// overlap at all cannot disagree.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/align/prepared_map.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct ConfidenceOptions {
+  double min_score = 0.6;          // best hit's verification score
+  double min_margin = 0.15;        // over the best disagreeing hit
+  double max_disagreement = 0.05;  // share of points in the other map's free space
+  // Hits scoring less than best - agreement_window are not compared with the
+  // best (they cannot be rivals within min_margin, nor place hits for changes).
+  double agreement_window = 0.3;
+  // Calibration of `confidence`: logistic in the score and the margin.
+  double bias = -12.0, score_weight = 12.0, margin_weight = 20.0;
+};
+
+struct Verdict {
+  bool sure = false;
+  double confidence = 0.0;   // estimated probability that the best hit is right
+  double best_score = 0.0;
+  double rival_score = 0.0;  // best disagreeing hit's score (0 if none)
+  size_t agreeing = 0;       // other hits that agree with the best
+};
+
+// A verified hit as the verdict sees it.
+struct JudgedHit {
+  double score = 0.0;
+  Pose2 pose;                     // query own frame in the hit's own frame
+  const PreparedMap* map = nullptr;
+  bool agrees_with_best = false;  // output
+};
+
+// Judges `hits` (best first); sets each hit's agrees_with_best (the best
+// agrees with itself).
+Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {});
+
+// Largest share of either map's points in the other's free space under the
+// relative pose `b_in_a` (hit B's own frame in hit A's own frame).
+double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_in_a);
+
+}  // namespace lmd

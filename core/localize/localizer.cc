@@ -1,0 +1,146 @@
+#include "core/localize/localizer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "core/align/icp.h"
+#include "core/localmap/pose_ops.h"
+#include "core/viewpoint/orientation.h"
+
+namespace lmd {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// One stored map to verify: its hypotheses' poses, best first.
+struct Candidate {
+  uint64_t map_id = 0;
+  std::vector<Pose2> guesses;
+  double votes = 0.0;
+  size_t first_rank = 0;
+};
+
+}  // namespace
+
+PreparedPlace PreparePlace(const LocalMap& map, const LocalizeOptions& options) {
+  PreparedPlace p;
+  p.map = std::make_shared<const PreparedMap>(PrepareMap(map, options.match.map));
+  p.features = DescribePlace(p.map->points, p.map->heading, options.features);
+  return p;
+}
+
+LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const PreparedPlace* prepared) {
+  LocalQuery q;
+  PreparedPlace place = prepared ? *prepared : PreparePlace(map, options);
+  q.map = std::move(place.map);
+  q.features = std::move(place.features);
+  q.match = PrepareQuery(map, options.match, q.map->heading);
+  q.source = std::move(map);
+  return q;
+}
+
+Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                      const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
+                      bool with_changes) {
+  Localization out;
+  auto t = Clock::now();
+  const std::vector<PlaceHypothesis> hypotheses =
+      source.Search(query.features, options.search, excluded, &out.stats.search);
+  out.stats.hypotheses = hypotheses.size();
+  out.stats.search_ms = MsSince(t);
+
+  // The maps to verify, in order of their best hypothesis, each with all
+  // its hypotheses as guesses; route neighbours of chosen maps passed over.
+  t = Clock::now();
+  std::vector<Candidate> candidates;
+  std::vector<MapSource::Route> chosen_routes;
+  std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; npos: passed over
+  constexpr size_t kPassed = static_cast<size_t>(-1);
+  for (size_t r = 0; r < hypotheses.size(); ++r) {
+    const PlaceHypothesis& h = hypotheses[r];
+    auto it = at.find(h.map_id);
+    if (it == at.end()) {
+      if (candidates.size() >= options.verify_maps) continue;
+      MapSource::Route route;
+      const bool known = options.maps_per_route_window > 0 && source.RouteOf(h.map_id, &route);
+      size_t near = 0;
+      for (const MapSource::Route& c : chosen_routes) {
+        const uint64_t gap = c.sequence > route.sequence ? c.sequence - route.sequence : route.sequence - c.sequence;
+        near += known && c.robot == route.robot && gap <= options.route_window;
+      }
+      if (known && near >= options.maps_per_route_window) {
+        at.emplace(h.map_id, kPassed);
+        continue;
+      }
+      if (known) chosen_routes.push_back(route);
+      it = at.emplace(h.map_id, candidates.size()).first;
+      candidates.push_back({h.map_id, {}, h.votes, r});
+    }
+    if (it->second != kPassed) candidates[it->second].guesses.push_back(HypothesisPose(h, query.map->heading));
+  }
+  std::vector<LocalizedHit> hits;
+  for (const Candidate& c : candidates) {
+    if (stop && stop()) break;
+    std::shared_ptr<const PreparedMap> db = source.Prepared(c.map_id);
+    if (!db) continue;  // deleted meanwhile
+    auto scored = [&](const ScanMatch& m) {
+      LocalizedHit hit;
+      hit.pose = m.pose;
+      hit.overlap = m.score;
+      hit.inlier_rms_m = m.inlier_rms_m;
+      hit.conflict = m.conflict_fraction;
+      hit.reverse_conflict =
+          MeasureOverlap(db->points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
+      hit.score = hit.overlap - options.conflict_weight * hit.conflict -
+                  options.reverse_conflict_weight * hit.reverse_conflict;
+      return hit;
+    };
+    LocalizedHit hit = scored(MatchLocalMaps(query.match, *db, c.guesses, options.match));
+    ++out.stats.maps_matched;
+    if (hits.size() < options.guess_free_maps) {
+      LocalizedHit global = scored(MatchLocalMapsGlobal(query.match, *db, options.match));
+      if (global.score > hit.score) hit = global;
+    }
+    hit.map_id = c.map_id;
+    hit.votes = c.votes;
+    hit.first_stage_rank = c.first_rank;
+    hit.db = std::move(db);
+    hits.push_back(std::move(hit));
+  }
+  // Equal scores (a map that explains every query point, and its route
+  // neighbour that does too): the one that explains them more closely first.
+  std::stable_sort(hits.begin(), hits.end(), [](const LocalizedHit& a, const LocalizedHit& b) {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
+    return a.map_id < b.map_id;
+  });
+  out.stats.verify_ms = MsSince(t);
+
+  t = Clock::now();
+  std::vector<JudgedHit> judged;
+  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
+  out.verdict = Judge(&judged, options.confidence);
+  for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
+  out.stats.verdict_ms = MsSince(t);
+
+  if (with_changes && out.verdict.sure) {
+    t = Clock::now();
+    std::vector<AlignedMap> place;
+    for (const LocalizedHit& h : hits) {
+      if (h.agrees_with_best && h.score >= out.verdict.best_score - options.confidence.agreement_window) {
+        place.push_back({h.db.get(), h.pose, h.map_id});
+      }
+    }
+    out.changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,
+                                   options.changes);
+    out.stats.changes_ms = MsSince(t);
+  }
+  if (hits.size() > options.top_k) hits.resize(options.top_k);
+  out.hits = std::move(hits);
+  return out;
+}
+
+}  // namespace lmd

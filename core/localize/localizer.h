@@ -1,0 +1,127 @@
+// The localisation pipeline: one query map in, ranked stored maps out, each
+// with the query's metric pose in it, a verdict on whether the answer can be
+// trusted, and the changes the query shows. lmdd's default method and
+// lmd-eval's `best` are this code with these defaults.
+//
+//   1. first stage: the place index (place_index.h) ranks pose hypotheses
+//      (map, quarter turn, translation) by feature votes;
+//   2. verification: the best `verify_hypotheses` hypotheses are scan
+//      matched (core/align: branch and bound in a window around each, ICP),
+//      one match per map over all its hypotheses;
+//   3. re-ranking by the verification score: the share of query points the
+//      map explains, minus the share that lands in its observed free space,
+//      minus the share of its points that land in the query's free space;
+//   4. the verdict (confidence.h): sure when the best hit is strong and no
+//      hit that disagrees with it comes close;
+//   5. change masks (core/change/geometric_changes.h) against the hits that
+//      agree with the best one, when the answer is sure.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/align/prepared_map.h"
+#include "core/align/scan_match.h"
+#include "core/change/change_detector.h"
+#include "core/change/geometric_changes.h"
+#include "core/localize/confidence.h"
+#include "core/localize/map_source.h"
+#include "core/place/place_features.h"
+#include "core/place/place_index.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct LocalizeOptions {
+  PlaceFeatureOptions features;
+  PlaceSearchOptions search;
+  // Maps scan matched: the best hypotheses' maps, in order of their votes,
+  // with all of each map's hypotheses as guesses.
+  size_t verify_maps = 20;
+  // A place is verified through few of its maps: a map whose route
+  // neighbour (same robot, at most route_window numbers apart) is already
+  // among maps_per_route_window chosen ones is passed over, so that the
+  // verified maps cover more places (a place the robots passed often
+  // collects votes from many maps and would fill every slot, leaving the
+  // right place or a rival unverified). 0 = no limit.
+  size_t route_window = 4;
+  size_t maps_per_route_window = 1;
+  // Window around each hypothesis; the index's guess already gives the turn.
+  ScanMatchOptions match = [] {
+    ScanMatchOptions m;
+    m.quarter_turns = false;
+    return m;
+  }();
+  // The first `guess_free_maps` maps verified are also matched guess-free
+  // (the whole map, turns from the compasses), keeping the better match: a
+  // hypothesis may hold a look-alike pose within the right map.
+  size_t guess_free_maps = 0;
+  // Verification score = overlap - conflict_weight * conflicts -
+  // reverse_conflict_weight * reverse conflicts (fractions).
+  double conflict_weight = 1.0;
+  double reverse_conflict_weight = 1.0;
+  ConfidenceOptions confidence;
+  GeometricChangeOptions changes;
+  size_t top_k = 10;  // hits returned
+};
+
+// What the pipeline computes once per stored map (lmdd: at insert): the map
+// prepared for scan matching, with its free space, and its place features in
+// the compass frame of map->heading.
+struct PreparedPlace {
+  std::shared_ptr<const PreparedMap> map;
+  PlaceFeatures features;
+};
+PreparedPlace PreparePlace(const LocalMap& map, const LocalizeOptions& options);
+
+// The query side, prepared once.
+struct LocalQuery {
+  std::shared_ptr<const PreparedMap> map;  // the query as a map (points, free space, heading)
+  PlaceFeatures features;                  // in map->heading's compass frame
+  PreparedQuery match;                     // subsampled points for scan matching
+  LocalMap source;                         // points, trajectory and scans (change masks)
+};
+
+// Prepares `map` (own frame). `prepared`: the same map's PreparePlace
+// (e.g. it was stored a moment ago); null: computed here.
+LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const PreparedPlace* prepared = nullptr);
+
+struct LocalizedHit {
+  uint64_t map_id = 0;
+  Pose2 pose;                    // query own frame in the db map's own frame
+  double score = 0.0;            // verification score (above)
+  double overlap = 0.0;          // share of query points within the inlier radius
+  double conflict = 0.0;         // share of query points in the db map's free space
+  double reverse_conflict = 0.0; // share of db points in the query's free space
+  double inlier_rms_m = 0.0;     // RMS distance of the explained query points (ties: smaller first)
+  double votes = 0.0;            // first-stage votes of its best hypothesis
+  size_t first_stage_rank = 0;   // rank of its best hypothesis (0 = first)
+  bool agrees_with_best = false; // a place hit: consistent with the best hit (confidence.h)
+  std::shared_ptr<const PreparedMap> db;
+};
+
+struct LocalizeStats {
+  size_t hypotheses = 0;     // from the first stage
+  size_t maps_matched = 0;   // scan matches run
+  PlaceSearchStats search;
+  double prepare_ms = 0, search_ms = 0, verify_ms = 0, verdict_ms = 0, changes_ms = 0;
+};
+
+struct Localization {
+  std::vector<LocalizedHit> hits;  // best first, at most top_k
+  Verdict verdict;
+  std::vector<ChangeMask> changes;  // best first; db_map_id = a hit's map id
+  LocalizeStats stats;
+};
+
+// Runs the pipeline on `source`'s maps, leaving out those `excluded` says.
+// `stop` (optional) is asked before each scan match; once true, no further
+// map is matched. `with_changes`: compute change masks.
+Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                      const std::function<bool(uint64_t)>& excluded = {}, const std::function<bool()>& stop = {},
+                      bool with_changes = false);
+
+}  // namespace lmd

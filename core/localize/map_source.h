@@ -1,0 +1,43 @@
+// What the localisation pipeline (localizer.h) needs from a collection of
+// stored maps: the first-stage search over their place features and each
+// map prepared for scan matching. lmdd implements it over its RocksDB store
+// and caches (server/), lmd-eval and the tests over maps in memory
+// (memory_collection.h).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/align/prepared_map.h"
+#include "core/place/place_index.h"
+
+namespace lmd {
+
+class MapSource {
+ public:
+  virtual ~MapSource() = default;
+
+  // PlaceIndex::Search over the collection's maps.
+  virtual std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
+                                              const std::function<bool(uint64_t)>& excluded,
+                                              PlaceSearchStats* stats) const = 0;
+
+  // The stored map `map_id` prepared for scan matching (PrepareMap with its
+  // free space, heading = its place features' compass heading); null if it
+  // is no longer stored. Thread-safe.
+  virtual std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const = 0;
+
+  // Where a stored map lies on the route of the robot that made it: the
+  // robot, and the map's number in the robot's sequence of maps. Maps a few
+  // numbers apart on one route overlap and show one place. False when
+  // unknown (no robot or sequence given).
+  struct Route {
+    uint64_t robot = 0;
+    uint64_t sequence = 0;
+  };
+  virtual bool RouteOf(uint64_t map_id, Route* route) const = 0;
+};
+
+}  // namespace lmd

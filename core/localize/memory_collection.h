@@ -1,0 +1,42 @@
+// A collection of stored maps held in memory, for lmd-eval, benchmarks and
+// tests: the same MapSource lmdd serves from its store, without RocksDB.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "core/localize/localizer.h"
+#include "core/localize/map_source.h"
+#include "core/place/place_index.h"
+#include "core/status.h"
+
+namespace lmd {
+
+class MemoryCollection : public MapSource {
+ public:
+  // Stores a map under `id` (PreparePlace's result), made by `robot` as its
+  // map number `sequence` (MapSource::Route). AlreadyExists or
+  // PlaceIndex::Add's errors; nothing changes on error. Not thread-safe.
+  Status Add(uint64_t id, PreparedPlace place, Route route);
+
+  std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
+                                      const std::function<bool(uint64_t)>& excluded,
+                                      PlaceSearchStats* stats) const override;
+  std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
+  bool RouteOf(uint64_t map_id, Route* route) const override;
+
+  const PlaceIndex& index() const { return index_; }
+  size_t size() const { return maps_.size(); }
+
+ private:
+  PlaceIndex index_;
+  struct Stored {
+    std::shared_ptr<const PreparedMap> map;
+    Route route;
+  };
+  std::unordered_map<uint64_t, Stored> maps_;
+};
+
+}  // namespace lmd

@@ -1,0 +1,119 @@
+// The first stage of the localisation pipeline: an index over the stored
+// maps' place features (place_features.h) that turns a query's features into
+// ranked pose hypotheses (map, quarter turn, translation) without scoring
+// every stored map.
+//
+// Nearest neighbours: multi-table hashing of the 128-bit codes (locality-
+// sensitive hashing for the angle between descriptors). Table t keys a
+// feature by 16 of its code's bits (each bit in one table); a query feature
+// looks up its bucket in every table for each of the 4 quarter turns (its
+// code turned by RotateCode) and keeps the `neighbours` stored features of
+// smallest Hamming distance. Buckets holding more than max_bucket features
+// are skipped: they hold the descriptors of plain walls, which every map
+// has and which tell no place from another.
+//
+// Voting (generalised Hough transform): each kept pair (query feature q,
+// stored feature d of map m, quarter turn k) votes for the translation
+// t = d - R(k) q between the compass frames, in cells of vote_cell_m per
+// axis. A map's hypotheses are its best 2 x 2 blocks of cells; their votes
+// rank the maps, their mean translation is the pose guess that verification
+// refines. Features of one place vote for one translation; a look-alike
+// place collects votes too, which is why hypotheses are verified, not trusted.
+//
+// Thread safety: const methods may run concurrently; Add / Remove need
+// exclusive access (the caller's lock).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <unordered_map>
+#include <vector>
+
+#include "core/place/place_features.h"
+#include "core/status.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct PlaceSearchOptions {
+  // Stored features kept per query feature and quarter turn.
+  size_t neighbours = 10;
+  // Codes farther than this (of 128 bits) do not vote.
+  int max_hamming = 40;
+  // Buckets with more features than this are not read (0 = read all).
+  size_t max_bucket = 2000;
+  double vote_cell_m = 1.0;  // m, translation cell
+  // Each query feature casts one vote in all, shared among its kept pairs
+  // (all 4 turns) in proportion to exp(-(distance - nearest) / temperature),
+  // distances in bits: a distinctive feature (one close match) votes for its
+  // match, a plain one (many alike) spreads its vote thin. 0: every kept pair
+  // votes 1.
+  double vote_temperature = 0.0;
+  size_t max_hypotheses = 40;      // returned, best first
+  size_t hypotheses_per_map = 2;   // distinct translations or turns per map
+};
+
+// Pose hypothesis for one stored map: db compass = R(k * 90 deg) query compass + translation.
+struct PlaceHypothesis {
+  uint64_t map_id = 0;
+  double db_heading = 0.0;  // rad, the stored map's compass heading
+  int quarter_turns = 0;  // k in 0..3
+  Point2 translation;     // m, in the db map's compass frame
+  double votes = 0.0;
+};
+
+// The hypothesis as a pose of the query's own frame in the db map's own
+// frame, given the query's compass heading.
+Pose2 HypothesisPose(const PlaceHypothesis& hypothesis, double query_heading);
+
+// What one search did (cost measures).
+struct PlaceSearchStats {
+  size_t lookups = 0;     // bucket reads
+  size_t candidates = 0;  // stored features compared
+  size_t votes = 0;
+  size_t maps_voted = 0;  // maps that received a vote
+};
+
+class PlaceIndex {
+ public:
+  static constexpr int kTables = 8;
+  static constexpr int kKeyBits = 16;
+  static constexpr size_t kMaxFeaturesPerMap = 1023;
+  static constexpr uint32_t kMaxMaps = (1u << 22) - 1;
+
+  PlaceIndex();
+
+  // Indexes `features` under `id`. AlreadyExists if `id` is stored;
+  // InvalidArgument beyond kMaxFeaturesPerMap features; ResourceExhausted
+  // beyond kMaxMaps maps. Nothing changes on error.
+  Status Add(uint64_t id, PlaceFeatures features);
+  // Removes the map; false if `id` is not stored.
+  bool Remove(uint64_t id);
+
+  // Ranked hypotheses (most votes first; ties: smaller map id) for `query`
+  // (features with their unturned codes). Maps for which `excluded(id)` is
+  // true are never returned. `stats` (optional) receives the work done.
+  std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
+                                      const std::function<bool(uint64_t)>& excluded = {},
+                                      PlaceSearchStats* stats = nullptr) const;
+
+  // The stored features of `id`, or null.
+  const PlaceFeatures* Features(uint64_t id) const;
+  size_t size() const { return id_to_slot_.size(); }
+  size_t FeatureCount() const { return feature_count_; }
+  size_t MemoryBytes() const;
+
+ private:
+  static uint32_t Key(const PlaceCode& code, int table);
+  static uint32_t Handle(uint32_t slot, uint32_t feature) { return slot << 10 | feature; }
+
+  std::vector<std::vector<uint32_t>> buckets_;  // kTables * 2^kKeyBits lists of handles
+  std::unordered_map<uint64_t, uint32_t> id_to_slot_;
+  std::vector<uint64_t> slot_id_;
+  std::vector<PlaceFeatures> slot_features_;
+  std::vector<uint32_t> free_slots_;
+  size_t feature_count_ = 0;
+};
+
+}  // namespace lmd

@@ -1,0 +1,38 @@
+#include "server/prepared_maps.h"
+
+namespace lmd::server {
+
+size_t PreparedMapCache::bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return bytes_;
+}
+
+std::shared_ptr<const PreparedMap> PreparedMapCache::Find(const std::string& collection, uint64_t index_id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = index_.find(KeyOf(collection, index_id));
+  if (it == index_.end()) {
+    ++misses_;
+    return nullptr;
+  }
+  entries_.splice(entries_.begin(), entries_, it->second);
+  return it->second->second;
+}
+
+void PreparedMapCache::Put(const std::string& collection, uint64_t index_id,
+                           std::shared_ptr<const PreparedMap> prepared) {
+  if (!prepared) return;
+  const size_t size = prepared->MemoryBytes();
+  const std::string key = KeyOf(collection, index_id);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (capacity_bytes_ == 0 || size > capacity_bytes_ || index_.count(key) != 0) return;
+  entries_.emplace_front(key, std::move(prepared));
+  index_[key] = entries_.begin();
+  bytes_ += size;
+  while (bytes_ > capacity_bytes_) {
+    bytes_ -= entries_.back().second->MemoryBytes();
+    index_.erase(entries_.back().first);
+    entries_.pop_back();
+  }
+}
+
+}  // namespace lmd::server

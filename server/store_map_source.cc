@@ -1,0 +1,30 @@
+#include "server/store_map_source.h"
+
+#include "proto/convert.h"
+
+namespace lmd::server {
+
+std::vector<PlaceHypothesis> StoreMapSource::Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
+                                                    const std::function<bool(uint64_t)>&,
+                                                    PlaceSearchStats* stats) const {
+  Result<std::vector<PlaceHypothesis>> found = store_->SearchPlaces(collection_, query, options, excluded_, stats);
+  return found.ok() ? std::move(found).value() : std::vector<PlaceHypothesis>{};
+}
+
+std::shared_ptr<const PreparedMap> StoreMapSource::Prepared(uint64_t map_id) const {
+  if (std::shared_ptr<const PreparedMap> cached = cache_->Find(collection_, map_id)) return cached;
+  Result<IndexedEntry> entry = store_->Indexed(collection_, map_id);
+  if (!entry.ok()) return nullptr;
+  Result<v1::StoredMap> stored = store_->GetMap(collection_, entry->map_id);
+  if (!stored.ok()) return nullptr;  // deleted meanwhile
+  auto prepared = std::make_shared<const PreparedMap>(
+      PrepareMap(MethodView(FromProto(stored->map())), store_->indexing().localize.match.map, entry->heading));
+  cache_->Put(collection_, map_id, prepared);
+  return prepared;
+}
+
+bool StoreMapSource::RouteOf(uint64_t map_id, Route* route) const {
+  return store_->RouteOf(collection_, map_id, route);
+}
+
+}  // namespace lmd::server
