@@ -13,6 +13,7 @@ struct Rotation {
   double theta = 0.0;
   Point2 target;  // where the centroid lands at offset (0, 0)
   size_t region = 0;
+  bool near_excluded = false;  // within the excluded angle (CorrelativeOptions::exclude_*)
   int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // offsets (cells), inclusive
   std::vector<int32_t> cx, cy;
 };
@@ -65,13 +66,31 @@ void ScoreChildren(const LikelihoodLevel& level, const Rotation& r, int dx, int 
 
 class BranchAndBound {
  public:
-  BranchAndBound(const PreparedMap& db, const std::vector<Rotation>& rotations)
-      : db_(db), rotations_(rotations) {}
+  BranchAndBound(const PreparedMap& db, const std::vector<Rotation>& rotations, const CorrelativeOptions& options)
+      : db_(db), rotations_(rotations), options_(options) {}
+
+  // True when every translation of the block of 2^level cells at (dx, dy)
+  // is excluded: the excluded disk is convex, so its four corners suffice.
+  bool Excluded(const Block& b, int level) const {
+    const Rotation& r = rotations_[b.rotation];
+    if (!r.near_excluded) return false;
+    const double cell = db_.options.cell_m, r2 = options_.exclude_radius_m * options_.exclude_radius_m;
+    const int span = (1 << level) - 1;
+    for (int cx : {b.dx, b.dx + span}) {
+      for (int cy : {b.dy, b.dy + span}) {
+        const double x = r.target.x + cx * cell - options_.exclude_centroid.x;
+        const double y = r.target.y + cy * cell - options_.exclude_centroid.y;
+        if (x * x + y * y > r2) return false;
+      }
+    }
+    return true;
+  }
 
   // Depth-first, best child first; candidates at `level` sorted by score.
   void Search(int level, std::vector<Block>& candidates) {
     for (const Block& c : candidates) {
       if (c.score <= best_.score) break;  // sorted: nothing better below
+      if (Excluded(c, level)) continue;
       if (level == 0) {
         best_ = c;
         continue;
@@ -103,6 +122,7 @@ class BranchAndBound {
  private:
   const PreparedMap& db_;
   const std::vector<Rotation>& rotations_;
+  const CorrelativeOptions& options_;
 };
 
 }  // namespace
@@ -143,6 +163,8 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
       r.target = reg.centroid_target;
       r.region = ri;
       r.x0 = -wx; r.x1 = wx; r.y0 = -wy; r.y1 = wy;
+      r.near_excluded = options.exclude_radius_m > 0 &&
+                        std::abs(std::remainder(r.theta - options.exclude_theta, 2.0 * M_PI)) <= options.exclude_angle_rad;
       const double c = std::cos(r.theta), s = std::sin(r.theta);
       r.cx.resize(query_points.size());
       r.cy.resize(query_points.size());
@@ -167,13 +189,14 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   while (top + 1 < static_cast<int>(db.levels.size()) && (1 << top) < widest) ++top;
   const int top_step = 1 << top;
   std::vector<Block> candidates;
-  BranchAndBound bnb(db, rotations);
+  BranchAndBound bnb(db, rotations, options);
   bnb.best_.score = static_cast<int64_t>(std::floor(std::max(0.0, options.min_score) * 255.0 * query_points.size()));
   // Seed the bound with the exact scores at the regions' centres (offset 0):
   // a guess is usually near the optimum, so most blocks are pruned at once.
   for (size_t k = 0; k < rotations.size(); ++k) {
     const int64_t centre = ScoreAt(db.levels[0], rotations[k], 0, 0);
-    if (centre > bnb.best_.score) bnb.best_ = {static_cast<int32_t>(k), 0, 0, centre};
+    const Block seed{static_cast<int32_t>(k), 0, 0, centre};
+    if (centre > bnb.best_.score && !bnb.Excluded(seed, 0)) bnb.best_ = seed;
   }
   for (size_t k = 0; k < rotations.size(); ++k) {
     const Rotation& r = rotations[k];

@@ -35,6 +35,14 @@ struct CorrelativeOptions {
   // bound is not above it are pruned, so a hopeless pair ends early (on real
   // logs 0.4 halved the time of wrong pairs). 0 = always report the exact best.
   double min_score = 0.35;
+  // Poses to leave out: those that put the query centroid within
+  // exclude_radius_m of exclude_centroid and turn within exclude_angle_rad
+  // of exclude_theta. For the second-best alignment, away from the best
+  // (a look-alike pose of the same map). exclude_radius_m <= 0: none.
+  Point2 exclude_centroid;
+  double exclude_theta = 0.0;
+  double exclude_radius_m = 0.0;
+  double exclude_angle_rad = 0.0;
 };
 
 struct CorrelativeResult {

@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 
+#include "core/localmap/local_map_builder.h"
+
 namespace lmd {
 namespace {
 
@@ -146,7 +148,7 @@ void BuildNormals(PreparedMap* m) {
 }  // namespace
 
 size_t PreparedMap::MemoryBytes() const {
-  size_t bytes = points.size() * sizeof(Point2) * 2 + bucket_start.size() * 4;
+  size_t bytes = (points.size() * 2 + sparse_points.size()) * sizeof(Point2) + bucket_start.size() * 4;
   for (const LikelihoodLevel& l : levels) bytes += l.values.size();
   bytes += occupancy.cells().size();
   return bytes;
@@ -172,6 +174,7 @@ PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOp
     m.max_corner.y = std::max(m.max_corner.y, p.y);
   }
   m.heading = known_heading ? *known_heading : EstimateDominantOrientation(m.points, options.orientation);
+  m.sparse_points = DeduplicatePoints(m.points, std::max(0.01, options.sparse_cell_m));
   BuildPyramid(&m);
   BuildBuckets(&m);
   BuildNormals(&m);

@@ -33,6 +33,7 @@ struct PreparedMapOptions {
   // are found exactly (ICP correspondences and the inlier radius must not exceed it).
   double neighbour_cell_m = 0.4;
   double normal_radius_m = 0.3;  // m, neighbours used for a point's normal (PCA); >= 3 needed
+  double sparse_cell_m = 0.3;    // m, cell of sparse_points
   OrientationOptions orientation;  // entropy compass for `heading`
   // Free space (PrepareMap only, maps with scans or a trajectory): beams
   // ray-cast on a grid (cell 0.1 m, cropped 12 m around the trajectory) so
@@ -52,6 +53,9 @@ struct LikelihoodLevel {
 struct PreparedMap {
   PreparedMapOptions options;
   std::vector<Point2> points;       // the map's finite points, own frame, in bucket order (below)
+  // One of `points` per sparse_cell_m cell: shares of the map's points (in
+  // another map's free space, say) measured at a fraction of the cost.
+  std::vector<Point2> sparse_points;
   std::vector<Point2> normals;      // unit normal per point; (0, 0) where undefined
   Point2 min_corner, max_corner;    // bounding box of points (own frame)
   double heading = 0.0;             // rad in [0, pi/2): dominant orientation (entropy compass)

@@ -2,24 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unordered_set>
 
+#include "core/localmap/local_map_builder.h"
 #include "core/viewpoint/orientation.h"
 
 namespace lmd {
 namespace {
 
+// Query points kept one per cell of `cell_m` (0: all).
 std::vector<Point2> Subsample(const std::vector<Point2>& points, double cell_m) {
-  if (cell_m <= 0.0) return points;
-  std::unordered_set<uint64_t> seen;
-  std::vector<Point2> out;
-  for (const Point2& p : points) {
-    const int64_t cx = static_cast<int64_t>(std::floor(p.x / cell_m));
-    const int64_t cy = static_cast<int64_t>(std::floor(p.y / cell_m));
-    const uint64_t key = (static_cast<uint64_t>(cx) << 32) ^ static_cast<uint64_t>(cy & 0xffffffff);
-    if (seen.insert(key).second) out.push_back(p);
-  }
-  return out;
+  return cell_m > 0.0 ? DeduplicatePoints(points, cell_m) : points;
 }
 
 Point2 Apply(const Pose2& pose, const Point2& p) {
@@ -118,6 +110,41 @@ ScanMatch MatchLocalMaps(const PreparedQuery& query, const PreparedMap& db, cons
 ScanMatch MatchLocalMaps(const LocalMap& query, const LocalMap& db, const std::vector<Pose2>& guesses,
                          const ScanMatchOptions& options) {
   return MatchLocalMaps(PrepareQuery(query, options), PrepareMap(db, options.map), guesses, options);
+}
+
+ScanMatch SecondBestMatch(const PreparedQuery& query, const PreparedMap& db, const Pose2& best, double radius_m,
+                          double angle_deg, const ScanMatchOptions& options) {
+  ScanMatchOptions excluding = options;
+  excluding.correlative.exclude_centroid = Apply(best, query.centroid);
+  excluding.correlative.exclude_theta = best.theta;
+  excluding.correlative.exclude_radius_m = radius_m;
+  excluding.correlative.exclude_angle_rad = angle_deg * M_PI / 180.0;
+  ScanMatch m = MatchLocalMapsGlobal(query, db, excluding);
+  const Point2 at = Apply(m.pose, query.centroid), best_at = excluding.correlative.exclude_centroid;
+  const bool back = std::hypot(at.x - best_at.x, at.y - best_at.y) <= radius_m &&
+                    std::abs(std::remainder(m.pose.theta - best.theta, 2.0 * M_PI)) <= excluding.correlative.exclude_angle_rad;
+  if (back) m.score = 0.0;
+  return m;
+}
+
+ScanMatch MatchLocalMapsAtTurns(const PreparedQuery& query, const PreparedMap& db, const std::vector<double>& thetas,
+                                const ScanMatchOptions& options) {
+  ScanMatch m;
+  if (!Matchable(query, db, options) || thetas.empty()) return m;
+  const Point2 centre{(db.min_corner.x + db.max_corner.x) / 2, (db.min_corner.y + db.max_corner.y) / 2};
+  std::vector<SearchRegion> regions;
+  for (double theta : thetas) {
+    SearchRegion r;
+    r.theta = theta;
+    r.half_window_rad = options.window_deg * M_PI / 180.0;
+    r.centroid_target = centre;
+    r.half_window_x_m = (db.max_corner.x - db.min_corner.x) / 2 + options.global_margin_m;
+    r.half_window_y_m = (db.max_corner.y - db.min_corner.y) / 2 + options.global_margin_m;
+    bool duplicate = false;
+    for (const SearchRegion& other : regions) duplicate = duplicate || SameRegion(r, other);
+    if (!duplicate) regions.push_back(r);
+  }
+  return Match(query, db, regions, std::vector<int>(regions.size(), -1), options);
 }
 
 ScanMatch MatchLocalMapsGlobal(const PreparedQuery& query, const PreparedMap& db, const ScanMatchOptions& options) {

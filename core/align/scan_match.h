@@ -105,4 +105,18 @@ ScanMatch MatchLocalMaps(const LocalMap& query, const LocalMap& db, const std::v
 ScanMatch MatchLocalMapsGlobal(const PreparedQuery& query, const PreparedMap& db,
                                const ScanMatchOptions& options = {});
 
+// Over the whole db map too, but only at the rotations `thetas` (each
+// +- window_deg): the translation is free, the turn known (e.g. a
+// retrieval hypothesis's, and its half turn).
+ScanMatch MatchLocalMapsAtTurns(const PreparedQuery& query, const PreparedMap& db, const std::vector<double>& thetas,
+                                const ScanMatchOptions& options = {});
+
+// The best guess-free alignment at least radius_m (query centroid) or
+// angle_deg away from `best`: whether another pose in the same map explains
+// the query too (a corridor seen from either end, a repeated bay). Score 0
+// when none scores above the search's min_score, or when its refinement
+// slides back to within the excluded zone (then it is `best` itself).
+ScanMatch SecondBestMatch(const PreparedQuery& query, const PreparedMap& db, const Pose2& best, double radius_m,
+                          double angle_deg, const ScanMatchOptions& options = {});
+
 }  // namespace lmd

@@ -19,11 +19,12 @@ double FreeSpaceShare(const std::vector<Point2>& points, const PreparedMap& a, c
 }  // namespace
 
 double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_in_a) {
-  return std::max(FreeSpaceShare(b.points, a, b_in_a), FreeSpaceShare(a.points, b, Inverse(b_in_a)));
+  return std::max(FreeSpaceShare(b.sparse_points, a, b_in_a), FreeSpaceShare(a.sparse_points, b, Inverse(b_in_a)));
 }
 
-Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options) {
+Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, double self_rival) {
   Verdict v;
+  v.rival_score = self_rival;
   if (hits->empty() || (*hits)[0].map == nullptr) return v;
   JudgedHit& best = (*hits)[0];
   best.agrees_with_best = true;

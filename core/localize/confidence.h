@@ -36,7 +36,7 @@ struct Verdict {
   bool sure = false;
   double confidence = 0.0;   // estimated probability that the best hit is right
   double best_score = 0.0;
-  double rival_score = 0.0;  // best disagreeing hit's score (0 if none)
+  double rival_score = 0.0;  // best disagreeing hit's score, or the best map's at another pose (0 if none)
   size_t agreeing = 0;       // other hits that agree with the best
 };
 
@@ -49,8 +49,9 @@ struct JudgedHit {
 };
 
 // Judges `hits` (best first); sets each hit's agrees_with_best (the best
-// agrees with itself).
-Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {});
+// agrees with itself). `self_rival`: the score of the best hit's map at
+// another pose (a rival whatever the maps say; 0: none).
+Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {}, double self_rival = 0.0);
 
 // Largest share of either map's points in the other's free space under the
 // relative pose `b_in_a` (hit B's own frame in hit A's own frame).

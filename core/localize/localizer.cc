@@ -15,6 +15,29 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
+// A scan match as a hit: its pose and verification score.
+LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options) {
+  LocalizedHit hit;
+  hit.pose = m.pose;
+  hit.overlap = m.score;
+  hit.inlier_rms_m = m.inlier_rms_m;
+  hit.conflict = m.conflict_fraction;
+  hit.reverse_conflict =
+      MeasureOverlap(db.sparse_points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
+  hit.score = hit.overlap - options.conflict_weight * hit.conflict -
+              options.reverse_conflict_weight * hit.reverse_conflict;
+  return hit;
+}
+
+// The hit at `pose`, measured as verification measures (no search).
+LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options) {
+  ScanMatch m;
+  m.pose = pose;
+  const Overlap o = MeasureOverlap(query.match.points, db, pose, options.match.inlier_radius_m);
+  m.score = o.fraction, m.inlier_rms_m = o.rms_m, m.conflict_fraction = o.conflict_fraction;
+  return Scored(query, db, m, options);
+}
+
 // One stored map to verify: its hypotheses' poses, best first.
 struct Candidate {
   uint64_t map_id = 0;
@@ -86,22 +109,18 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
     if (stop && stop()) break;
     std::shared_ptr<const PreparedMap> db = source.Prepared(c.map_id);
     if (!db) continue;  // deleted meanwhile
-    auto scored = [&](const ScanMatch& m) {
-      LocalizedHit hit;
-      hit.pose = m.pose;
-      hit.overlap = m.score;
-      hit.inlier_rms_m = m.inlier_rms_m;
-      hit.conflict = m.conflict_fraction;
-      hit.reverse_conflict =
-          MeasureOverlap(db->points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
-      hit.score = hit.overlap - options.conflict_weight * hit.conflict -
-                  options.reverse_conflict_weight * hit.reverse_conflict;
-      return hit;
-    };
-    LocalizedHit hit = scored(MatchLocalMaps(query.match, *db, c.guesses, options.match));
+    ScanMatch match;
+    if (out.stats.maps_matched < options.whole_map_maps) {
+      std::vector<double> thetas;
+      for (const Pose2& g : c.guesses) thetas.push_back(g.theta), thetas.push_back(g.theta + M_PI);
+      match = MatchLocalMapsAtTurns(query.match, *db, thetas, options.match);
+    } else {
+      match = MatchLocalMaps(query.match, *db, c.guesses, options.match);
+    }
+    LocalizedHit hit = Scored(query, *db, match, options);
     ++out.stats.maps_matched;
     if (hits.size() < options.guess_free_maps) {
-      LocalizedHit global = scored(MatchLocalMapsGlobal(query.match, *db, options.match));
+      LocalizedHit global = Scored(query, *db, MatchLocalMapsGlobal(query.match, *db, options.match), options);
       if (global.score > hit.score) hit = global;
     }
     hit.map_id = c.map_id;
@@ -120,9 +139,27 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   out.stats.verify_ms = MsSince(t);
 
   t = Clock::now();
+  double self_rival = 0.0;
+  if (!hits.empty()) {
+    LocalizedHit& best = hits[0];
+    if (options.refine_best) {
+      LocalizedHit refined = ScoredAt(query, *best.db, RefinePose(query.match.points, *best.db, best.pose, options.refine),
+                                      options);
+      if (refined.score >= best.score) {
+        refined.map_id = best.map_id, refined.votes = best.votes, refined.first_stage_rank = best.first_stage_rank;
+        refined.db = best.db;
+        best = std::move(refined);
+      }
+    }
+    if (options.self_rival_radius_m > 0) {
+      const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
+                                               options.self_rival_angle_deg, options.match);
+      if (second.score > 0) self_rival = Scored(query, *best.db, second, options).score;
+    }
+  }
   std::vector<JudgedHit> judged;
   for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
-  out.verdict = Judge(&judged, options.confidence);
+  out.verdict = Judge(&judged, options.confidence, self_rival);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out.stats.verdict_ms = MsSince(t);
 

@@ -11,8 +11,9 @@
 //   3. re-ranking by the verification score: the share of query points the
 //      map explains, minus the share that lands in its observed free space,
 //      minus the share of its points that land in the query's free space;
-//   4. the verdict (confidence.h): sure when the best hit is strong and no
-//      hit that disagrees with it comes close;
+//   4. the verdict (confidence.h): the best hit's pose refined, then sure
+//      when it is strong and neither a hit that disagrees with it nor
+//      another pose in the same map comes close;
 //   5. change masks (core/change/geometric_changes.h) against the hits that
 //      agree with the best one, when the answer is sure.
 #pragma once
@@ -23,6 +24,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/align/icp.h"
 #include "core/align/prepared_map.h"
 #include "core/align/scan_match.h"
 #include "core/change/change_detector.h"
@@ -59,6 +61,26 @@ struct LocalizeOptions {
   // (the whole map, turns from the compasses), keeping the better match: a
   // hypothesis may hold a look-alike pose within the right map.
   size_t guess_free_maps = 0;
+  // The first `whole_map_maps` maps verified are searched over their whole
+  // extent at their hypotheses' turns and the half turns of those (the
+  // votes' translation may name a look-alike stretch of the same corridor),
+  // instead of near each guess.
+  size_t whole_map_maps = 0;
+  // The best hit's pose refined by ICP on every query point (verification
+  // runs ICP on points icp_cell_m apart).
+  bool refine_best = true;
+  IcpOptions refine = [] {
+    IcpOptions icp;
+    icp.max_iterations = 30;
+    icp.converged_m = 1e-4;
+    return icp;
+  }();
+  // The best guess-free alignment of the best hit's map at least
+  // self_rival_radius_m (query centroid) or self_rival_angle_deg away from
+  // its pose is a rival for the verdict: the same map may fit the query at
+  // two poses (a corridor seen from either end). <= 0: not looked for.
+  double self_rival_radius_m = 1.0;
+  double self_rival_angle_deg = 10.0;
   // Verification score = overlap - conflict_weight * conflicts -
   // reverse_conflict_weight * reverse conflicts (fractions).
   double conflict_weight = 1.0;
@@ -107,7 +129,7 @@ struct LocalizeStats {
   size_t hypotheses = 0;     // from the first stage
   size_t maps_matched = 0;   // scan matches run
   PlaceSearchStats search;
-  double prepare_ms = 0, search_ms = 0, verify_ms = 0, verdict_ms = 0, changes_ms = 0;
+  double search_ms = 0, verify_ms = 0, verdict_ms = 0, changes_ms = 0;
 };
 
 struct Localization {
