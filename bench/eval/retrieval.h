@@ -8,86 +8,36 @@
 #include <string>
 #include <vector>
 
-#include "core/change/geometric_changes.h"
+#include "bench/eval/answer_scoring.h"
 #include "core/eval/retrieval_metrics.h"
+#include "core/localize/localizer.h"
 #include "core/index/retrieve_options.h"
 #include "core/viewpoint/viewpoint.h"
 
 namespace lmd::eval {
 
-// How the top hits of the first stage are re-ranked after verification.
-enum class Rerank {
-  kOverlap,   // fraction of query points within 0.3 m of the db map after alignment
-  kMeanDist,  // maps with consistency >= 0.5 first, then the smallest mean distance after alignment
-  kConsistency,  // overlap - 2 * (query points in db free space) - 4 * (db points in query free space)
-  kConsistencyDist,  // kConsistency - 0.5 * min(mean distance after alignment, 3 m)
-};
-
-// One method: a descriptor configuration, a first-stage similarity and an
-// optional geometric verification of its top hits.
+// One method: either a paper method (a descriptor configuration and the
+// first-stage similarity, every candidate scored exhaustively), or the
+// product's localisation pipeline (core/localize, the code lmdd serves) with
+// some LocalizeOptions: `best` with the served defaults, each ablation row
+// with one option changed.
 struct MethodSpec {
   std::string key;    // results.json key
   std::string label;  // report label
   std::string group;  // "paper", "descriptor", "best", "ablation"
-  // Descriptor.
+  // Paper methods: descriptor.
   Planner planner = Planner::kCoG;
-  bool both_planners = false;  // first stage = max of the CoG and CoR kernel scores
   int setting = 1;             // paper descriptor setting #1..#8
   int word_bits = 10;          // appearance word bits B (paper: 10)
-  double interest_cell_m = 0.5;  // describer interest grid (DescriberOptions default)
-  int max_features = 80;         // describer cap (DescriberOptions default)
-  double inner_radius_m = 0.0;   // m, inner words (DescriberOptions; 0 = none, the paper's)
   // First stage.
   Method method = Method::kLmd;
   double max_offset_m = 0.5;     // RetrieveOptions::max_offset_m (its default)
   bool stationary = false;       // queries without simulated change
-  // Verification of the first stage's top hits (0 = none).
-  size_t verify_top_n = 0;
-  // When none of those matched (a hit showing the place), verify this many
-  // more, the next of the first stage's ranking (0 = never).
-  size_t verify_more_if_unmatched = 0;
-  Rerank rerank = Rerank::kOverlap;
-  bool global_fallback = true;   // guess-free scan matching when the guided match is poor
-  bool lazy_global = true;       // ... only if no candidate matched near its guess (VerifyConfig)
-  bool always_global = false;    // ... for every verified candidate, keeping the better (VerifyConfig)
-  double verify_window_m = 1.0;  // m, scan-matching window around each guess (VerifyConfig)
-  // Unverified maps up to this many positions before or after a matched map
-  // in its log (the same robot's route: they overlap it) rank just after it,
-  // lower by kNeighbourStep per position (0 = off).
-  size_t neighbour_window = 0;
-  // Route neighbours also lift verified maps that did not match (false:
-  // unverified maps only).
-  bool lift_unmatched_neighbours = false;
-  // Runs of matched maps that are consecutive in their log are ordered
-  // among themselves by aligned mean distance (the relevant map's
-  // criterion) instead of the re-ranking key.
-  bool order_runs_by_distance = false;
-  // Query expansion: the best matched hit's own descriptors score every
-  // candidate that did not match, and an unverified map adds those scores
-  // to the query's (other passes of the place resemble the stored map more
-  // than the changed query). false = off.
-  bool expand_from_matched = false;
-  // With the expansion: this many unverified maps it ranks first are then
-  // verified, guessed through the best matched map's pose (0 = none).
-  size_t verify_expanded = 0;
-  // Those maps may also be verified maps that did not match (their first
-  // guess was poor); each keeps the better of its two alignments.
-  bool reverify_unmatched = false;
-  // Change detection evaluated on this method's hits.
+  // The paper's change detector (LOF + NN-d) evaluated on this method's hits.
   bool change_eval = false;
-  // Masks whose points the verified db map explains (a db point within 0.3 m
-  // under the verified pose) are ranked after the unexplained ones.
-  bool change_geometric = false;
-  // Geometric change masks (core/change/geometric_changes.h) against the
-  // hits verification matched, ranked before the descriptor's masks.
-  bool geometric_masks = false;
-  // Geometric masks ranked by evidence (free-space margin, range); false: by point count.
-  bool masks_by_evidence = true;
-  double mask_explained_radius_m = GeometricChangeOptions().explained_radius_m;
-  double mask_seen_through_share = GeometricChangeOptions().seen_through_share;
-  // Geometric masks against the matched hits whose re-ranking key is within
-  // this of the best matched hit's (PlaceHits).
-  double mask_key_window = kPlaceHitsWindow;
+  // The pipeline instead (groups best and ablation).
+  bool pipeline = false;
+  LocalizeOptions localize;
   std::string note;              // one line for the ablation table: what differs from best
 };
 
@@ -114,8 +64,9 @@ struct DatasetResults {
   size_t maps = 0;
   size_t queries = 0;
   std::map<std::string, RetrievalSummary> methods;
+  std::map<std::string, AnswerSummary> pipeline;  // pipeline methods: verdicts, change masks, CPU
   ChangeResult change;            // change_method's
-  std::string change_method;      // the first method with change_eval
+  std::string change_method;      // the first method with change_eval (the paper's detector)
   std::map<std::string, ChangeResult> method_change;  // every method with change_eval
 };
 

@@ -1,8 +1,9 @@
 // lmd-microbench: CPU cost of each stage of one DetectChanges call as lmdd
-// runs it (describe, retrieve, prepare a db map, verify the top hits, change
-// detection), on the demo world's local maps. Google Benchmark; run
-// `build/bench/lmd-microbench` (add --benchmark_filter=Verify to pick stages).
-// Each query is a demo map, searched in an index of all other demo maps; one
+// runs it (core/localize: prepare the query, first-stage search, scan
+// matching of the chosen maps, the verdict, change masks) and of the whole
+// call, on the demo world's local maps. Google Benchmark; run
+// `build/bench/lmd-microbench` (--benchmark_filter=Search picks a stage).
+// Each query is a demo map, localised against all other demo maps; one
 // iteration runs every query once, and `per_query` is the mean time of one.
 #include <algorithm>
 #include <memory>
@@ -10,66 +11,34 @@
 
 #include <benchmark/benchmark.h>
 
-#include "core/align/prepared_map.h"
-#include "core/align/relative_pose.h"
-#include "core/align/scan_match.h"
-#include "core/align/verify_hits.h"
-#include "core/change/change_detector.h"
-#include "core/describe/describer.h"
-#include "core/index/index.h"
+#include "core/localize/localizer.h"
+#include "core/localize/memory_collection.h"
 #include "core/sim/simulate.h"
-#include "core/viewpoint/viewpoint.h"
 
 namespace lmd {
 namespace {
 
-constexpr size_t kQueries = 40;        // every (maps / kQueries)-th demo map is a query
-constexpr size_t kVerified = 10;       // lmdd's verify_candidates default
-constexpr double kMaxOffsetM = 3.0;    // lmdd's default_max_offset_m
+constexpr size_t kQueries = 40;  // every (maps / kQueries)-th demo map is a query
 
-// The demo world described, indexed and prepared once, as lmdd stores it.
+// The demo world prepared and stored once, as lmdd stores it.
 struct World {
+  LocalizeOptions options;
   std::vector<LocalMap> maps;
-  std::vector<Lmd> lmds;
-  std::vector<std::shared_ptr<const PreparedMap>> prepared;
-  Index index = std::move(Index::Create()).value();
+  std::vector<PreparedPlace> places;
+  MemoryCollection collection;
   std::vector<size_t> queries;
 
   World() {
     maps = SimulateLocalMaps(DefaultDemoOptions());
     for (size_t i = 0; i < maps.size(); ++i) {
-      lmds.push_back(Describe(maps[i], PlanViewpoint(maps[i]), ProductDescriberOptions()));
-      prepared.push_back(std::make_shared<const PreparedMap>(PrepareMap(maps[i], {}, lmds[i].frame.heading)));
+      places.push_back(PreparePlace(maps[i], options));
+      (void)collection.Add(i, places.back(), {1, i + 1});
     }
     for (size_t i = 0; i < maps.size(); i += std::max<size_t>(1, maps.size() / kQueries)) queries.push_back(i);
-    for (size_t i = 0; i < maps.size(); ++i) (void)index.Add(i, lmds[i]);
   }
-
-  // The query's top hits, itself excluded (lmdd's query is not yet stored).
-  std::vector<MapHit> Hits(size_t q, RetrieveStats* total = nullptr) const {
-    RetrieveOptions options;
-    options.top_k = kVerified + 1;
-    options.max_offset_m = kMaxOffsetM;
-    RetrieveStats stats;
-    std::vector<MapHit> hits = std::move(index.Retrieve(lmds[q], options, &stats)).value();
-    if (total) total->maps_scored += stats.maps_scored;
-    hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const MapHit& h) { return h.map_id == q; }),
-               hits.end());
-    hits.resize(std::min(hits.size(), kVerified));
-    return hits;
-  }
-
-  std::vector<HitCandidate> Candidates(size_t q, const std::vector<MapHit>& hits) const {
-    std::vector<HitCandidate> out;
-    for (const MapHit& h : hits) {
-      HitCandidate c;
-      c.map_id = h.map_id;
-      c.db = prepared[h.map_id];
-      c.retrieval_score = h.score;
-      c.guesses = {RelativePose(lmds[q].frame, lmds[h.map_id].frame, h.orientation, h.offset)};
-      out.push_back(std::move(c));
-    }
-    return out;
+  // The query's own map is left out (lmdd's query is not yet stored).
+  std::function<bool(uint64_t)> Excluding(size_t q) const {
+    return [q](uint64_t id) { return id == q; };
   }
 };
 
@@ -84,113 +53,61 @@ benchmark::Counter PerQuery(size_t queries) {
                             benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-VerifyOptions LmddVerifyOptions() {
-  VerifyOptions options;
-  options.match.quarter_turns = false;  // as lmdd (hit_verifier.cc)
-  return options;
-}
-
-void BM_PlanAndDescribe(benchmark::State& state) {
+// A query map as lmdd receives it: prepared for scan matching (free space
+// ray-cast) and described (place features). lmdd does this once per map:
+// the insert and the query of one robot tick share it.
+void BM_PrepareQuery(benchmark::State& state) {
   const World& w = TheWorld();
   for (auto _ : state) {
-    for (size_t q : w.queries) {
-      benchmark::DoNotOptimize(Describe(w.maps[q], PlanViewpoint(w.maps[q]), ProductDescriberOptions()));
+    for (size_t q : w.queries) benchmark::DoNotOptimize(PrepareLocalQuery(w.maps[q], w.options));
+  }
+  state.counters["per_query"] = PerQuery(w.queries.size());
+}
+BENCHMARK(BM_PrepareQuery)->Unit(benchmark::kMillisecond);
+
+void BM_Search(benchmark::State& state) {
+  const World& w = TheWorld();
+  std::vector<LocalQuery> queries;
+  for (size_t q : w.queries) queries.push_back(PrepareLocalQuery(w.maps[q], w.options, &w.places[q]));
+  PlaceSearchStats stats, total;
+  for (auto _ : state) {
+    for (size_t i = 0; i < queries.size(); ++i) {
+      benchmark::DoNotOptimize(w.collection.Search(queries[i].features, w.options.search, w.Excluding(w.queries[i]), &stats));
+      total.candidates += stats.candidates;
     }
   }
-  state.counters["per_query"] = PerQuery(w.queries.size());
-}
-BENCHMARK(BM_PlanAndDescribe)->Unit(benchmark::kMillisecond);
-
-void BM_Retrieve(benchmark::State& state) {
-  const World& w = TheWorld();
-  RetrieveStats stats;
-  for (auto _ : state) {
-    for (size_t q : w.queries) benchmark::DoNotOptimize(w.Hits(q, &stats));
-  }
-  state.counters["per_query"] = PerQuery(w.queries.size());
-  // Maps scored exactly per query, of the maps in the index.
-  state.counters["maps_scored"] = benchmark::Counter(static_cast<double>(stats.maps_scored) / w.queries.size(),
-                                                     benchmark::Counter::kAvgIterations);
+  state.counters["per_query"] = PerQuery(queries.size());
+  state.counters["features_compared"] =
+      benchmark::Counter(static_cast<double>(total.candidates) / queries.size(), benchmark::Counter::kAvgIterations);
   state.counters["maps"] = static_cast<double>(w.maps.size());
 }
-BENCHMARK(BM_Retrieve)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Search)->Unit(benchmark::kMillisecond);
 
-void BM_PrepareMap(benchmark::State& state) {
+// The whole default-method query (first stage, scan matching, verdict), with
+// and without change masks, the query prepared already.
+void RunLocalize(benchmark::State& state, bool with_changes) {
   const World& w = TheWorld();
-  for (auto _ : state) {
-    for (size_t q : w.queries) benchmark::DoNotOptimize(PrepareMap(w.maps[q], {}, w.lmds[q].frame.heading));
-  }
-  state.counters["per_query"] = PerQuery(w.queries.size());
-}
-BENCHMARK(BM_PrepareMap)->Unit(benchmark::kMillisecond);
-
-// lmdd's verification of one query: its top hits, db maps already prepared.
-void BM_VerifyTopHits(benchmark::State& state) {
-  const World& w = TheWorld();
-  const VerifyOptions options = LmddVerifyOptions();
-  std::vector<PreparedQuery> queries;
-  std::vector<std::vector<HitCandidate>> candidates;
-  for (size_t q : w.queries) {
-    queries.push_back(PrepareQuery(w.maps[q], options.match, w.lmds[q].frame.heading));
-    candidates.push_back(w.Candidates(q, w.Hits(q)));
-  }
-  size_t low = 0, verified = 0, evaluations = 0;
+  std::vector<LocalQuery> queries;
+  for (size_t q : w.queries) queries.push_back(PrepareLocalQuery(w.maps[q], w.options, &w.places[q]));
+  double search = 0, verify = 0, verdict = 0, changes = 0, matched = 0;
   for (auto _ : state) {
     for (size_t i = 0; i < queries.size(); ++i) {
-      const std::vector<VerifiedHit> hits = VerifyHits(queries[i], candidates[i], options);
-      for (const VerifiedHit& h : hits) {
-        low += h.verified && h.score < options.global_below_score;
-        evaluations += h.match.search_evaluations;
-      }
-      verified += hits.size();
+      const Localization l = Localize(queries[i], w.collection, w.options, w.Excluding(w.queries[i]), {}, with_changes);
+      search += l.stats.search_ms, verify += l.stats.verify_ms, verdict += l.stats.verdict_ms;
+      changes += l.stats.changes_ms, matched += static_cast<double>(l.stats.maps_matched);
     }
   }
   state.counters["per_query"] = PerQuery(queries.size());
-  // Share of verified hits scoring below global_below_score (the guess-free
-  // search ran for them when no other hit of the query matched).
-  state.counters["low_score_share"] = verified ? static_cast<double>(low) / verified : 0.0;
-  // Correlative block scores per verified hit (the search's cost).
-  state.counters["evaluations"] = verified ? static_cast<double>(evaluations) / verified : 0.0;
-  size_t points = 0;
-  for (const PreparedQuery& q : queries) points += q.search_points.size();
-  state.counters["search_points"] = static_cast<double>(points) / queries.size();
+  const double n = static_cast<double>(queries.size());
+  for (const auto& [name, value] : {std::pair<const char*, double>{"search_ms", search}, {"verify_ms", verify},
+                                    {"verdict_ms", verdict}, {"changes_ms", changes}, {"maps_matched", matched}}) {
+    state.counters[name] = benchmark::Counter(value / n, benchmark::Counter::kAvgIterations);
+  }
 }
-BENCHMARK(BM_VerifyTopHits)->Unit(benchmark::kMillisecond);
-
-// The guess-free search alone, against each query's first hit.
-void BM_MatchGlobal(benchmark::State& state) {
-  const World& w = TheWorld();
-  const ScanMatchOptions options = LmddVerifyOptions().match;
-  std::vector<PreparedQuery> queries;
-  std::vector<size_t> dbs;
-  for (size_t q : w.queries) {
-    queries.push_back(PrepareQuery(w.maps[q], options, w.lmds[q].frame.heading));
-    dbs.push_back(w.Hits(q).front().map_id);
-  }
-  for (auto _ : state) {
-    for (size_t i = 0; i < queries.size(); ++i) {
-      benchmark::DoNotOptimize(MatchLocalMapsGlobal(queries[i], *w.prepared[dbs[i]], options));
-    }
-  }
-  state.counters["per_query"] = PerQuery(queries.size());
-}
-BENCHMARK(BM_MatchGlobal)->Unit(benchmark::kMillisecond);
-
-void BM_DetectChanges(benchmark::State& state) {
-  const World& w = TheWorld();
-  std::vector<std::vector<ChangeCandidate>> candidates;
-  for (size_t q : w.queries) {
-    candidates.emplace_back();
-    for (const MapHit& h : w.Hits(q)) candidates.back().push_back({h, &w.lmds[h.map_id]});
-  }
-  for (auto _ : state) {
-    for (size_t i = 0; i < candidates.size(); ++i) {
-      benchmark::DoNotOptimize(DetectChanges(w.lmds[w.queries[i]], candidates[i]));
-    }
-  }
-  state.counters["per_query"] = PerQuery(candidates.size());
-}
-BENCHMARK(BM_DetectChanges)->Unit(benchmark::kMillisecond);
+void BM_Localize(benchmark::State& state) { RunLocalize(state, false); }
+void BM_LocalizeWithChanges(benchmark::State& state) { RunLocalize(state, true); }
+BENCHMARK(BM_Localize)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LocalizeWithChanges)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace lmd

@@ -1,6 +1,6 @@
 // Scan matching of two local maps: the pose of the query map's own frame in
 // the db map's own frame, and how well the maps then overlap. Used to verify
-// retrieval hits geometrically (verify_hits.h) and to refine their pose.
+// retrieval hits geometrically (core/localize/localizer.h) and to refine their pose.
 //
 //   1. correlative branch-and-bound search (correlative_search.h) on the
 //      query points subsampled to search_cell_m, over windows around the

@@ -168,6 +168,7 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
     const size_t credited = std::max_element(free_votes.begin(), free_votes.end()) - free_votes.begin();
     mask.db_map_id = placed[credited].map->id;
     mask.score = score;
+    if (score < options.min_evidence) continue;
     masks.push_back(std::move(mask));
   }
   std::stable_sort(masks.begin(), masks.end(), [](const ChangeMask& a, const ChangeMask& b) {
@@ -175,19 +176,6 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
   });
   for (size_t r = 0; r < masks.size(); ++r) masks[r].rank = r;
   return masks;
-}
-
-std::vector<size_t> PlaceHits(const std::vector<double>& scores, double min_score, double window) {
-  auto held = [&](double s) { return std::isfinite(s) && s >= min_score; };
-  double best = -std::numeric_limits<double>::infinity();
-  for (double s : scores) {
-    if (held(s)) best = std::max(best, s);
-  }
-  std::vector<size_t> out;
-  for (size_t i = 0; i < scores.size(); ++i) {
-    if (held(scores[i]) && scores[i] >= best - window) out.push_back(i);
-  }
-  return out;
 }
 
 }  // namespace lmd

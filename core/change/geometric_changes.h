@@ -1,5 +1,5 @@
 // Geometric change masks: the parts of a query map that the stored maps of
-// its place contradict. Once scan matching (core/align/verify_hits.h) has
+// its place contradict. Once scan matching (core/localize/localizer.h) has
 // placed the query in each of those maps' frames, a query point is a *change*
 // when none of the maps has a point within explained_radius_m of it and at
 // least one of them observed it as free space: something stands where a
@@ -63,6 +63,10 @@ struct GeometricChangeOptions {
   // logs (seed 2, 80 queries each): 0.615 -> 0.637, no log worse. Row
   // abl_keep_moving.
   double seen_through_share = 0.2;
+  // Masks with less evidence (the ranking score above) are not reported:
+  // a few points at the edge of the free space, or far from the robot, are
+  // what a small misalignment or a grazing beam leaves. 0: all reported.
+  double min_evidence = 0.0;
 };
 
 // A stored map the query was aligned to.
@@ -85,16 +89,5 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
                                          const std::vector<AlignedMap>& maps,
                                          const GeometricChangeOptions& options = {});
 
-// Which verified hits show the query's place, to hold it against: the
-// indices of `scores` (verification scores, a consistency; not finite for
-// hits not verified) at least min_score and within `window` of the best of
-// them, in index order. A hit that matched far worse than the best is more
-// likely another place; its free space would make false changes. lmd-eval
-// best, change success@1 (window 0.3 against none): 0.750 -> 0.769 on orebro,
-// fr101 and intel (seed 1, all queries; windows 0, 0.15, 0.3 and 0.6 tried),
-// 0.637 -> 0.648 on the six other logs (seed 2, 80 queries each), no log
-// worse. Row abl_all_matched_masks.
-std::vector<size_t> PlaceHits(const std::vector<double>& scores, double min_score, double window);
-constexpr double kPlaceHitsWindow = 0.3;  // the window measured above (lmd-eval and lmdd)
 
 }  // namespace lmd

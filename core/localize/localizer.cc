@@ -139,7 +139,6 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   out.stats.verify_ms = MsSince(t);
 
   t = Clock::now();
-  double self_rival = 0.0;
   if (!hits.empty()) {
     LocalizedHit& best = hits[0];
     if (options.refine_best) {
@@ -151,15 +150,19 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
         best = std::move(refined);
       }
     }
-    if (options.self_rival_radius_m > 0) {
-      const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
-                                               options.self_rival_angle_deg, options.match);
-      if (second.score > 0) self_rival = Scored(query, *best.db, second, options).score;
-    }
   }
   std::vector<JudgedHit> judged;
   for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
-  out.verdict = Judge(&judged, options.confidence, self_rival);
+  out.verdict = Judge(&judged, options.confidence);
+  // Only a sure verdict can be overturned by another pose of the best map.
+  if (out.verdict.sure && options.self_rival_radius_m > 0) {
+    const LocalizedHit& best = hits[0];
+    const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
+                                             options.self_rival_angle_deg, options.match);
+    if (second.score > 0) {
+      out.verdict = Judge(&judged, options.confidence, Scored(query, *best.db, second, options).score);
+    }
+  }
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out.stats.verdict_ms = MsSince(t);
 

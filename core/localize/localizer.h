@@ -86,7 +86,14 @@ struct LocalizeOptions {
   double conflict_weight = 1.0;
   double reverse_conflict_weight = 1.0;
   ConfidenceOptions confidence;
-  GeometricChangeOptions changes;
+  // Evidence 5: on aces, fr079, intel and orebro (sure answers to changed
+  // queries) it kept 0.79 of the masks that found the simulated change and
+  // 0.09 of the others (evidence 4: 0.85 / 0.13; 6: 0.64 / 0.06).
+  GeometricChangeOptions changes = [] {
+    GeometricChangeOptions c;
+    c.min_evidence = 5.0;
+    return c;
+  }();
   size_t top_k = 10;  // hits returned
 };
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <tuple>
 
 namespace lmd {
 namespace {
@@ -109,6 +111,7 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
     if (slot_id_.size() >= kMaxMaps) return Status::ResourceExhausted("the place index holds its most maps");
     slot = static_cast<uint32_t>(slot_id_.size());
     slot_id_.push_back(0);
+    slot_hash_.push_back(0);
     slot_features_.emplace_back();
   }
   for (size_t i = 0; i < features.features.size(); ++i) {
@@ -118,6 +121,13 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
     }
   }
   feature_count_ += features.features.size();
+  uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a over the codes and positions
+  for (const PlaceFeature& f : features.features) {
+    uint32_t x, y;
+    std::memcpy(&x, &f.x, 4), std::memcpy(&y, &f.y, 4);
+    for (uint64_t word : {f.code[0], f.code[1], uint64_t{x} << 32 | y}) hash = (hash ^ word) * 0x100000001b3ULL;
+  }
+  slot_hash_[slot] = hash;
   slot_id_[slot] = id;
   slot_features_[slot] = std::move(features);
   id_to_slot_[id] = slot;
@@ -167,9 +177,16 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
   const size_t k_nearest = std::max<size_t>(1, options.neighbours);
   const double cell = options.vote_cell_m > 0 ? options.vote_cell_m : 1.0;
   VoteTable votes(query.features.size() * 4 * k_nearest);
+  // Ties of distance are broken by the stored feature's code, then by its
+  // map's content and its place in the map, so that answers depend on the
+  // maps' content, not on the order they were added in.
   struct Near {
     int distance;
+    uint64_t code, map_hash;
     uint32_t handle;
+    bool operator<(const Near& o) const {
+      return std::tie(distance, code, map_hash, handle) < std::tie(o.distance, o.code, o.map_hash, o.handle);
+    }
   };
   std::vector<Near> nearest;
   nearest.reserve(k_nearest + 1);
@@ -191,16 +208,17 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
         if (options.max_bucket > 0 && bucket.size() > options.max_bucket) continue;
         work.candidates += bucket.size();
         for (const uint32_t handle : bucket) {
-          const int d = HammingDistance(code, slot_features_[handle >> 10].features[handle & 1023].code);
+          const PlaceCode& stored = slot_features_[handle >> 10].features[handle & 1023].code;
+          const int d = HammingDistance(code, stored);
           if (d > worst) continue;
+          const Near near{d, stored[0], slot_hash_[handle >> 10] ^ (handle & 1023), handle};
+          if (nearest.size() == k_nearest && !(near < nearest.back())) continue;
           bool seen = false;  // the same feature from another table
           for (const Near& n : nearest) seen = seen || n.handle == handle;
           if (seen) continue;
-          auto at = std::upper_bound(nearest.begin(), nearest.end(), d,
-                                     [](int v, const Near& n) { return v < n.distance; });
-          nearest.insert(at, {d, handle});
+          nearest.insert(std::upper_bound(nearest.begin(), nearest.end(), near), near);
           if (nearest.size() > k_nearest) nearest.pop_back();
-          if (nearest.size() == k_nearest) worst = nearest.back().distance - 1;
+          if (nearest.size() == k_nearest) worst = nearest.back().distance;
         }
       }
       for (const Near& n : nearest) pairs.push_back({n.distance, n.handle, turn});
@@ -260,6 +278,7 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
   work.maps_voted = static_cast<size_t>(std::unique(voted.begin(), voted.end()) - voted.begin());
   std::sort(blocks.begin(), blocks.end(), [&](const Block& a, const Block& b) {
     if (a.weight != b.weight) return a.weight > b.weight;
+    if (slot_hash_[a.slot] != slot_hash_[b.slot]) return slot_hash_[a.slot] < slot_hash_[b.slot];
     if (slot_id_[a.slot] != slot_id_[b.slot]) return slot_id_[a.slot] < slot_id_[b.slot];
     return std::tie(a.turn, a.cx, a.cy) < std::tie(b.turn, b.cx, b.cy);
   });

@@ -111,6 +111,7 @@ class PlaceIndex {
   std::vector<std::vector<uint32_t>> buckets_;  // kTables * 2^kKeyBits lists of handles
   std::unordered_map<uint64_t, uint32_t> id_to_slot_;
   std::vector<uint64_t> slot_id_;
+  std::vector<uint64_t> slot_hash_;  // of each map's features: orders equal votes by content, not insertion
   std::vector<PlaceFeatures> slot_features_;
   std::vector<uint32_t> free_slots_;
   size_t feature_count_ = 0;

@@ -222,16 +222,6 @@ TEST(GeometricChangesTest, PointsTheDbMapNeverObservedAreNotChanges) {
   EXPECT_TRUE(GeometricChanges(shifted.points, shifted.trajectory, shifted.scans, {}).empty());
 }
 
-TEST(GeometricChangesTest, ThePlaceIsHeldAgainstHitsNearTheBestScore) {
-  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
-  const std::vector<double> scores = {0.9, -inf, 0.5, 0.1, 0.7, nan};
-  EXPECT_EQ(PlaceHits(scores, 0.2, 0.3), (std::vector<size_t>{0, 4}));
-  EXPECT_EQ(PlaceHits(scores, 0.2, inf), (std::vector<size_t>{0, 2, 4}));
-  EXPECT_EQ(PlaceHits(scores, 0.2, 0.0), (std::vector<size_t>{0}));
-  EXPECT_TRUE(PlaceHits(scores, 0.95, 1.0).empty());
-  EXPECT_TRUE(PlaceHits({}, 0.2, 0.3).empty());
-  EXPECT_TRUE(PlaceHits({-inf, nan}, -inf, inf).empty());  // hits not verified are never held
-}
 
 }  // namespace
 }  // namespace lmd

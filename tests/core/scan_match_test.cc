@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 
 #include "core/align/correlative_search.h"
-#include "core/align/verify_hits.h"
 #include "core/eval/ground_truth.h"
 #include "core/localmap/pose_ops.h"
 #include "core/sim/simulate.h"
@@ -156,153 +155,6 @@ TEST(ScanMatchTest, SamePlaceMostlyOutscoresDifferentPlaces) {
   EXPECT_GE(same.front(), 0.5);  // a place seen again always aligns with at least its overlap
 }
 
-TEST(ScanMatchTest, VerifyHitsMovesTheTruePlaceFromFifthToFirst) {
-  const std::vector<LocalMap>& maps = DemoMaps();
-  // A query with one relevant map (overlap >= 0.85: the demo world repeats
-  // rooms, so a partial overlap can lose to an alias) and four unrelated ones.
-  size_t query = 0, relevant = maps.size();
-  std::vector<size_t> wrong;
-  for (size_t i = 0; i < maps.size() && relevant == maps.size(); i += 13) {
-    for (size_t j = i + 15; j < maps.size(); ++j) {
-      if (PlaceOverlap(maps[i], maps[j]) >= 0.85) {
-        query = i;
-        relevant = j;
-        break;
-      }
-    }
-  }
-  ASSERT_LT(relevant, maps.size());
-  for (size_t j = 0; j < maps.size() && wrong.size() < 4; j += 17) {
-    if (j != query && PlaceOverlap(maps[query], maps[j]) == 0.0) wrong.push_back(j);
-  }
-  ASSERT_EQ(wrong.size(), 4u);
-  std::vector<HitCandidate> candidates;
-  for (size_t k = 0; k < wrong.size(); ++k) {
-    candidates.push_back({100 + k, std::make_shared<PreparedMap>(PrepareMap(maps[wrong[k]])), 0.9 - 0.1 * k, {}, {}});
-  }
-  // The true place comes with a retrieval-like guess (1.3 m, 6 deg off); the
-  // others with none (guess-free search).
-  const Pose2 truth = Compose(Inverse(maps[relevant].truth.global_frame), maps[query].truth.global_frame);
-  const Pose2 guess{truth.x + 1.0, truth.y - 0.8, truth.theta + Deg(6)};
-  candidates.push_back({7, std::make_shared<PreparedMap>(PrepareMap(maps[relevant])), 0.1, {guess}, {}});
-  const std::vector<VerifiedHit> hits = VerifyHits(maps[query], candidates);
-  ASSERT_EQ(hits.size(), 5u);
-  EXPECT_EQ(hits[0].map_id, 7u);
-  EXPECT_EQ(hits[0].retrieval_rank, 4u);
-  EXPECT_TRUE(hits[0].verified);
-  // The refined pose is the true one (query own frame in db own frame).
-  EXPECT_LT(TranslationError(hits[0].match.pose, truth), 0.2);
-  EXPECT_LT(AngleErrorDeg(hits[0].match.pose, truth), 2.0);
-}
-
-TEST(ScanMatchTest, VerifyHitsSkipsTheGuessFreeSearchOnceACandidateMatched) {
-  const LocalMap& db = RichMap();
-  const Pose2 truth{3.0, 0.0, 0.0};
-  const LocalMap query = MovedCopy(db, truth);
-  const auto prepared = std::make_shared<PreparedMap>(PrepareMap(db));
-  const Pose2 far_off{truth.x + 6.0, truth.y - 5.0, truth.theta};  // far outside the guided window
-  // Candidate 1 matches at its guess; candidate 2 (same place, bad guess) is
-  // left to its guided score.
-  const std::vector<HitCandidate> candidates = {{1, prepared, 0.9, {truth}, {}}, {2, prepared, 0.8, {far_off}, {}}};
-  const std::vector<VerifiedHit> lazy = VerifyHits(query, candidates);
-  ASSERT_EQ(lazy.size(), 2u);
-  EXPECT_EQ(lazy[0].map_id, 1u);
-  EXPECT_GT(lazy[0].score, 0.9);
-  EXPECT_EQ(lazy[1].match.guess, 0);
-  EXPECT_LT(lazy[1].score, 0.5);
-  // Never skipping: the guess-free search finds candidate 2's true pose.
-  VerifyOptions always;
-  always.matched_score = 2.0;
-  const std::vector<VerifiedHit> eager = VerifyHits(query, candidates, always);
-  const VerifiedHit& second = eager[0].map_id == 2 ? eager[0] : eager[1];
-  EXPECT_EQ(second.match.guess, -1);
-  EXPECT_GT(second.score, 0.9);
-  EXPECT_LT(TranslationError(second.match.pose, truth), 0.05);
-  // Without the good candidate nothing matched, so the search runs.
-  const std::vector<VerifiedHit> alone = VerifyHits(query, {candidates[1]});
-  EXPECT_EQ(alone[0].match.guess, -1);
-  EXPECT_GT(alone[0].score, 0.9);
-}
-
-TEST(ScanMatchTest, VerifyHitsStopsAfterEnoughMatchesAndPreparesOnlyVerifiedMaps) {
-  const LocalMap& db = RichMap();
-  const Pose2 truth{3.0, 0.0, 0.0};
-  const LocalMap query = MovedCopy(db, truth);
-  int prepared_count = 0;
-  auto prepare = [&] {
-    ++prepared_count;
-    return std::make_shared<const PreparedMap>(PrepareMap(db));
-  };
-  // Four candidates of the query's place, prepared on demand.
-  std::vector<HitCandidate> candidates;
-  for (uint64_t id = 1; id <= 4; ++id) candidates.push_back({id, nullptr, 1.0 - 0.1 * id, {truth}, prepare});
-  VerifyOptions options;
-  options.enough_matches = 2;
-  const std::vector<VerifiedHit> hits = VerifyHits(query, candidates, options);
-  ASSERT_EQ(hits.size(), 4u);
-  EXPECT_EQ(prepared_count, 2);
-  for (size_t i = 0; i < 2; ++i) {
-    EXPECT_TRUE(hits[i].verified);
-    EXPECT_GT(hits[i].score, 0.8);
-    EXPECT_NE(hits[i].db, nullptr);
-  }
-  EXPECT_EQ(hits[2].map_id, 3u);  // the rest follow unverified, in input order
-  EXPECT_FALSE(hits[2].verified);
-  EXPECT_EQ(hits[2].db, nullptr);
-  EXPECT_EQ(hits[3].map_id, 4u);
-  // 0 verifies every candidate.
-  prepared_count = 0;
-  options.enough_matches = 0;
-  for (const VerifiedHit& h : VerifyHits(query, candidates, options)) EXPECT_TRUE(h.verified);
-  EXPECT_EQ(prepared_count, 4);
-}
-
-TEST(ScanMatchTest, ReverseConflictsLowerAMapWithPointsInTheQuerysFreeSpace) {
-  const LocalMap& query = RichMap();
-  const PreparedMap query_map = PrepareMap(query);
-  // The same map plus 40 points where the query's beams passed (free, no point near).
-  LocalMap cluttered = query;
-  for (double x = query_map.min_corner.x; x < query_map.max_corner.x && cluttered.points.size() < query.points.size() + 40;
-       x += 0.3) {
-    for (double y = query_map.min_corner.y; y < query_map.max_corner.y; y += 0.3) {
-      if (InFreeSpace(query_map, {x, y}) && NearestPoint(query_map, {x, y}, 0.4) < 0) cluttered.points.push_back({x, y});
-      if (cluttered.points.size() == query.points.size() + 40) break;
-    }
-  }
-  ASSERT_EQ(cluttered.points.size(), query.points.size() + 40);
-  const Pose2 identity{0, 0, 0};
-  const std::vector<HitCandidate> candidates = {
-      {1, std::make_shared<PreparedMap>(PrepareMap(query)), 0.9, {identity}, {}},
-      {2, std::make_shared<PreparedMap>(PrepareMap(cluttered)), 0.8, {identity}, {}}};
-  VerifyOptions options;
-  options.reverse_conflict_weight = 4.0;
-  auto by_id = [](const std::vector<VerifiedHit>& hits, uint64_t id) {
-    return *std::find_if(hits.begin(), hits.end(), [&](const VerifiedHit& h) { return h.map_id == id; });
-  };
-  // Without the query's free space the two score alike (every query point is explained by both).
-  const std::vector<VerifiedHit> forward = VerifyHits(PrepareQuery(query), candidates, options);
-  EXPECT_NEAR(by_id(forward, 1).score, by_id(forward, 2).score, 0.01);
-  const std::vector<VerifiedHit> both = VerifyHits(PrepareQuery(query), candidates, options, &query_map);
-  const VerifiedHit same = by_id(both, 1), extra = by_id(both, 2);
-  EXPECT_LT(same.reverse_conflict_fraction, 0.01);
-  const double expected = 40.0 / static_cast<double>(cluttered.points.size());
-  EXPECT_NEAR(extra.reverse_conflict_fraction, expected, 0.5 * expected);
-  EXPECT_LT(extra.score, same.score - 2.0 * expected);
-  EXPECT_EQ(both[0].map_id, 1u);
-}
-
-TEST(ScanMatchTest, VerifyHitsBreaksTiesByRetrievalScoreAndKeepsUnverifiedLast) {
-  std::vector<HitCandidate> candidates = {{1, nullptr, 0.2, {}, {}}, {2, nullptr, 0.5, {}, {}}, {3, nullptr, 0.9, {}, {}}};
-  VerifyOptions options;
-  options.max_candidates = 2;
-  const std::vector<VerifiedHit> hits = VerifyHits(RichMap(), candidates, options);
-  ASSERT_EQ(hits.size(), 3u);
-  EXPECT_EQ(hits[0].map_id, 2u);  // both verified ones score 0: retrieval score decides
-  EXPECT_EQ(hits[1].map_id, 1u);
-  EXPECT_EQ(hits[2].map_id, 3u);  // beyond max_candidates: last, unverified
-  EXPECT_FALSE(hits[2].verified);
-}
-
 TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
   const LocalMap& rich = RichMap();
   LocalMap empty;
@@ -322,10 +174,45 @@ TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
       EXPECT_EQ(MatchLocalMapsGlobal(PrepareQuery(*q), PrepareMap(*d)).score, 0.0);
     }
   }
-  std::vector<HitCandidate> candidates = {{1, std::make_shared<PreparedMap>(PrepareMap(empty)), 1.0, {guess}, {}},
-                                          {2, std::make_shared<PreparedMap>(PrepareMap(one)), 0.5, {}, {}}};
-  for (const VerifiedHit& h : VerifyHits(empty, candidates)) EXPECT_EQ(h.score, 0.0);
-  for (const VerifiedHit& h : VerifyHits(one, candidates)) EXPECT_EQ(h.score, 0.0);
+  EXPECT_EQ(SecondBestMatch(PrepareQuery(one), PrepareMap(rich), guess, 1.0, 10.0).score, 0.0);
+}
+
+// A map made of two identical rooms 10 m apart: the query (one room) fits
+// at two poses; the second-best search, away from the first, finds the
+// other room, and never returns a pose inside the excluded zone.
+TEST(ScanMatchTest, SecondBestMatchFindsTheLookAlikePoseAwayFromTheBest) {
+  auto room = [](double x0, std::vector<Point2>* points) {
+    for (double t = 0; t <= 4.0; t += 0.05) {
+      points->push_back({x0 + t, 0.0});
+      points->push_back({x0 + t, 3.0});
+    }
+    for (double t = 0; t <= 3.0; t += 0.05) {
+      if (t < 1.0 || t > 2.0) points->push_back({x0, t});  // a door on the left
+      points->push_back({x0 + 4.0, t});
+    }
+    for (double t = 0; t <= 1.0; t += 0.05) points->push_back({x0 + 1.0 + t, 1.5});  // a shelf
+  };
+  LocalMap two_rooms, one_room;
+  room(0.0, &two_rooms.points);
+  room(10.0, &two_rooms.points);
+  room(0.0, &one_room.points);
+  const PreparedMap db = PrepareMap(two_rooms);
+  const PreparedQuery query = PrepareQuery(one_room);
+  const ScanMatch best = MatchLocalMaps(query, db, {Pose2{0.2, 0.1, 0.0}});
+  ASSERT_GT(best.score, 0.9);
+  const ScanMatch second = SecondBestMatch(query, db, best.pose, 1.0, 10.0);
+  EXPECT_GT(second.score, 0.9);
+  const Point2 at = TransformPoint(second.pose, query.centroid), best_at = TransformPoint(best.pose, query.centroid);
+  EXPECT_NEAR(std::hypot(at.x - best_at.x, at.y - best_at.y), 10.0, 0.3);
+
+  // One room with an inner wall along one side: its other poses (the room
+  // turned by a half turn) leave that wall unexplained.
+  for (double t = 0; t <= 2.5; t += 0.05) one_room.points.push_back({0.5 + t, 2.3});
+  const PreparedMap single = PrepareMap(one_room);
+  const PreparedQuery walled = PrepareQuery(one_room);
+  const ScanMatch alone = MatchLocalMaps(walled, single, {Pose2{0.2, 0.1, 0.0}});
+  ASSERT_GT(alone.score, 0.95);
+  EXPECT_LT(SecondBestMatch(walled, single, alone.pose, 1.0, 10.0).score, alone.score - 0.1);
 }
 
 // Branch and bound must return the lattice's exact best: compare with every

@@ -68,7 +68,8 @@ TEST(ConcurrencyTest, ConcurrentRobotsMatchASerialReplay) {
     ASSERT_TRUE(serial.client().Retrieve(QueryFor(maps[i]), &b).ok());
     ASSERT_EQ(a.hits_size(), b.hits_size());
     for (int h = 0; h < a.hits_size(); ++h) {
-      EXPECT_DOUBLE_EQ(a.hits(h).score(), b.hits(h).score()) << "query " << maps[i].id << " hit " << h;
+      EXPECT_DOUBLE_EQ(a.hits(h).score(), b.hits(h).score()) << "query " << maps[i].id << " hit " << h << ": "
+                                                            << a.ShortDebugString() << "\n vs " << b.ShortDebugString();
       // Equal scores are ordered by internal index ids, which follow insertion
       // order, and the last hit may tie with maps beyond top_k; hits with a
       // score of their own above the last one must be the same map.
