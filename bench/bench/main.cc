@@ -5,12 +5,14 @@
 #include "bench/bench/fill_bench.h"
 #include "bench/bench/index_bench.h"
 #include "bench/bench/load_bench.h"
+#include "bench/bench/places_bench.h"
 
 int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
   if (command == "index") return lmd::bench::RunIndexBench(argc - 2, argv + 2);
   if (command == "load") return lmd::bench::RunLoadBench(argc - 2, argv + 2);
   if (command == "fill") return lmd::bench::RunFillBench(argc - 2, argv + 2);
+  if (command == "places") return lmd::bench::RunPlacesBench(argc - 2, argv + 2);
   if (command.empty() || command == "-h" || command == "--help") {
     std::printf("usage: lmd-bench <command> [options]\n"
                 "commands:\n"
@@ -18,7 +20,8 @@ int main(int argc, char** argv) {
                 "  load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]\n"
                 "       [--no-seed] [--first-robot N]      simulated robots inserting and detecting changes\n"
                 "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
-                "                                          store N simulated maps (scale runs)\n");
+                "                                          store N simulated maps (scale runs)\n"
+                "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n");
     return command.empty() ? 2 : 0;
   }
   std::fprintf(stderr, "lmd-bench: unknown command '%s' (try --help)\n", command.c_str());

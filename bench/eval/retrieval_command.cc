@@ -387,7 +387,7 @@ std::unique_ptr<Collection> BuildCollection(const Dataset& d, const LocalizeOpti
   });
   bar.Done();
   for (size_t i = 0; i < d.maps.size(); ++i) {
-    if (!d.maps[i].points.empty()) c->maps.Add(i, c->places[i], {0, i + 1});  // one robot: the log
+    if (!d.maps[i].points.empty()) c->maps.Add(i, c->places[i], MapSource::Route{0, i + 1});  // one robot: the log
   }
   return c;
 }

@@ -32,7 +32,7 @@ struct World {
     maps = SimulateLocalMaps(DefaultDemoOptions());
     for (size_t i = 0; i < maps.size(); ++i) {
       places.push_back(PreparePlace(maps[i], options));
-      (void)collection.Add(i, places.back(), {1, i + 1});
+      (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1});
     }
     for (size_t i = 0; i < maps.size(); i += std::max<size_t>(1, maps.size() / kQueries)) queries.push_back(i);
   }

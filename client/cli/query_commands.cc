@@ -54,16 +54,42 @@ int FillQuery(const CommandContext& ctx, Request* request) {
 }
 
 void PrintHit(const v1::MapHit& hit) {
-  std::printf("%3u  %-24s K=%.4f  orientation=%3u deg  offset=(%.2f, %.2f) m", hit.rank(), hit.map_id().c_str(),
-              hit.score(), hit.orientation_deg(), hit.offset_x(), hit.offset_y());
+  if (hit.verified()) {  // the default method: a verification score and a scan-matched pose
+    std::printf("%3u  %-24s score=%.3f", hit.rank(), hit.map_id().c_str(), hit.score());
+  } else {
+    std::printf("%3u  %-24s K=%.4f  orientation=%3u deg  offset=(%.2f, %.2f) m", hit.rank(), hit.map_id().c_str(),
+                hit.score(), hit.orientation_deg(), hit.offset_x(), hit.offset_y());
+  }
   if (hit.has_pose()) {
     std::printf("  pose=(%.2f m, %.2f m, %.1f deg)", hit.pose().x(), hit.pose().y(), hit.pose().theta() * 180 / M_PI);
   }
-  std::printf("%s\n", hit.verified() ? "  verified" : "");
+  std::printf("%s\n", hit.verified() && hit.agrees_with_best() ? "  same place as the first" : "");
+}
+
+// The verdict line of a default-method answer.
+void PrintLocalization(const v1::Localization& l, bool json) {
+  if (json) {
+    std::printf("{\"localized\":%s,\"confidence\":%.4f,\"best_score\":%.4f,\"rival_score\":%.4f,\"agreeing\":%u}\n",
+                l.localized() ? "true" : "false", l.confidence(), l.best_score(), l.rival_score(), l.agreeing());
+    return;
+  }
+  std::printf("%s (confidence %.3f: best score %.3f, best rival %.3f, %u other hits agree)\n",
+              l.localized() ? "localized: the first hit's pose can be acted on" : "not localized: no hit is sure",
+              l.confidence(), l.best_score(), l.rival_score(), l.agreeing());
+}
+
+// "intel" for ".../intel.log.gz": the default robot of an ingested log.
+std::string LogName(const std::string& path) {
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  for (const char* ext : {".gz", ".log"}) {
+    const size_t n = std::string(ext).size();
+    if (name.size() > n && name.compare(name.size() - n, n, ext) == 0) name.resize(name.size() - n);
+  }
+  return name;
 }
 
 constexpr const char* kReducedDepthNote =
-    "(lmdd was busy and answered at its reduced depth: fewer hits verified; --verify N asks for a depth)";
+    "(lmdd was busy and answered at its reduced depth: fewer maps verified; --verify N asks for a depth)";
 
 }  // namespace
 
@@ -79,8 +105,9 @@ int IngestCommand(const CommandContext& ctx) {
     v1::InsertMapRequest* insert = request.add_maps();
     insert->mutable_metadata()->set_collection(collection);
     insert->mutable_metadata()->set_map_id((*maps)[i].id);
-    insert->mutable_metadata()->set_robot_id(ctx.args.Get("robot"));
-    insert->mutable_metadata()->set_sequence(i);
+    // The log is one robot's route: its maps' order tells lmdd which overlap.
+    insert->mutable_metadata()->set_robot_id(ctx.args.Get("robot", LogName(ctx.args.Get("log"))));
+    insert->mutable_metadata()->set_sequence(i + 1);
     *insert->mutable_map() = ToProto((*maps)[i]);
     v1::InsertMapsResponse response;
     const grpc::Status status = ctx.client.InsertMaps(request, &response);
@@ -119,6 +146,7 @@ int QueryCommand(const CommandContext& ctx) {
     }
   }
   if (!ctx.json && response.hits_size() == 0) std::printf("no map of '%s' matches\n", request.collection().c_str());
+  if (request.method() == v1::METHOD_DEFAULT) PrintLocalization(response.localization(), ctx.json);
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
   return 0;
 }
@@ -150,6 +178,7 @@ int ChangesCommand(const CommandContext& ctx) {
       }
     }
   }
+  if (request.method() == v1::METHOD_DEFAULT) PrintLocalization(response.localization(), ctx.json);
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
   return 0;
 }

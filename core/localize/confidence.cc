@@ -9,11 +9,12 @@
 namespace lmd {
 namespace {
 
-// Share of `points` (frame B), moved by `pose` into frame A, that land in
-// A's observed free space and are not near one of A's points.
+// Of `points` (frame B) moved by `pose` into frame A, those A observed
+// (near one of A's points, or in its free space): the share in its free space.
 double FreeSpaceShare(const std::vector<Point2>& points, const PreparedMap& a, const Pose2& pose) {
-  if (points.empty()) return 0.0;
-  return MeasureOverlap(points, a, pose, 0.3).conflict_fraction;
+  const Overlap o = MeasureOverlap(points, a, pose, 0.3);
+  const size_t observed = o.inliers + o.conflicts;
+  return observed == 0 ? 0.0 : static_cast<double>(o.conflicts) / static_cast<double>(observed);
 }
 
 }  // namespace
@@ -31,6 +32,7 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
   v.best_score = best.score;
   for (size_t i = 1; i < hits->size(); ++i) {
     JudgedHit& h = (*hits)[i];
+    h.agrees_with_best = false;
     if (h.map == nullptr || h.score < best.score - options.agreement_window) continue;
     // The query's pose in A and in B give B's frame in A's: A <- query <- B.
     const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));

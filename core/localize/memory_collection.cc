@@ -2,7 +2,7 @@
 
 namespace lmd {
 
-Status MemoryCollection::Add(uint64_t id, PreparedPlace place, Route route) {
+Status MemoryCollection::Add(uint64_t id, PreparedPlace place, std::optional<Route> route) {
   if (maps_.count(id) != 0) return Status::AlreadyExists("map " + std::to_string(id) + " is already stored");
   Status added = index_.Add(id, std::move(place.features));
   if (!added.ok()) return added;
@@ -23,8 +23,8 @@ std::shared_ptr<const PreparedMap> MemoryCollection::Prepared(uint64_t map_id) c
 
 bool MemoryCollection::RouteOf(uint64_t map_id, Route* route) const {
   const auto it = maps_.find(map_id);
-  if (it == maps_.end()) return false;
-  *route = it->second.route;
+  if (it == maps_.end() || !it->second.route) return false;
+  *route = *it->second.route;
   return true;
 }
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -16,10 +17,10 @@ namespace lmd {
 
 class MemoryCollection : public MapSource {
  public:
-  // Stores a map under `id` (PreparePlace's result), made by `robot` as its
-  // map number `sequence` (MapSource::Route). AlreadyExists or
+  // Stores a map under `id` (PreparePlace's result), with its place on its
+  // robot's route if known (MapSource::Route). AlreadyExists or
   // PlaceIndex::Add's errors; nothing changes on error. Not thread-safe.
-  Status Add(uint64_t id, PreparedPlace place, Route route);
+  Status Add(uint64_t id, PreparedPlace place, std::optional<Route> route = std::nullopt);
 
   std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
                                       const std::function<bool(uint64_t)>& excluded,
@@ -34,7 +35,7 @@ class MemoryCollection : public MapSource {
   PlaceIndex index_;
   struct Stored {
     std::shared_ptr<const PreparedMap> map;
-    Route route;
+    std::optional<Route> route;
   };
   std::unordered_map<uint64_t, Stored> maps_;
 };

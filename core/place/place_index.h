@@ -91,7 +91,9 @@ class PlaceIndex {
   // Removes the map; false if `id` is not stored.
   bool Remove(uint64_t id);
 
-  // Ranked hypotheses (most votes first; ties: smaller map id) for `query`
+  // Ranked hypotheses (most votes first; ties by the maps' content, then
+  // the smaller map id, so that the order maps were added in does not
+  // matter) for `query`
   // (features with their unturned codes). Maps for which `excluded(id)` is
   // true are never returned. `stats` (optional) receives the work done.
   std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,

@@ -1,0 +1,319 @@
+#include "core/localize/confidence.h"
+
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/align/prepared_map.h"
+#include "core/localmap/pose_ops.h"
+
+namespace lmd {
+namespace {
+
+// Points every 0.1 m (the builder's dedup cell) from a to b.
+void AddWall(std::vector<Point2>* points, const Point2& a, const Point2& b) {
+  const double length = std::hypot(b.x - a.x, b.y - a.y);
+  const int n = static_cast<int>(std::round(length / 0.1));
+  for (int i = 0; i <= n; ++i) {
+    const double t = n == 0 ? 0.0 : static_cast<double>(i) / n;
+    points->push_back({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)});
+  }
+}
+
+void AddRoomWalls(std::vector<Point2>* points) {
+  AddWall(points, {0, 0}, {10, 0});
+  AddWall(points, {10, 0}, {10, 6});
+  AddWall(points, {10, 6}, {0, 6});
+  AddWall(points, {0, 6}, {0, 0});
+}
+
+// A 10 x 6 m room the robot crossed along y = 3: without scans, the cells
+// within 0.6 m of the trajectory are its free space (occupancy_grid.h).
+LocalMap Room() {
+  LocalMap map;
+  map.id = "room";
+  AddRoomWalls(&map.points);
+  for (double x = 1.0; x <= 9.0; x += 0.5) map.trajectory.push_back({x, 3.0, 0.0});
+  return map;
+}
+
+// The same room with a partition wall where the room above was crossed (a
+// look-alike that contradicts it), crossed along y = 1.5.
+LocalMap PartitionedRoom() {
+  LocalMap map;
+  map.id = "partitioned";
+  AddRoomWalls(&map.points);
+  AddWall(&map.points, {2, 3}, {8, 3});
+  for (double x = 1.0; x <= 9.0; x += 0.5) map.trajectory.push_back({x, 1.5, 0.0});
+  return map;
+}
+
+// The map seen from a frame placed at `pose` in its own frame (points and
+// trajectory): the returned map's own frame is `pose` in `map`'s.
+LocalMap MovedCopy(const LocalMap& map, const Pose2& pose) {
+  LocalMap out;
+  out.id = map.id + "-moved";
+  const Pose2 inv = Inverse(pose);
+  for (const Point2& p : map.points) out.points.push_back(TransformPoint(inv, p));
+  for (const Pose2& p : map.trajectory) out.trajectory.push_back(Compose(inv, p));
+  return out;
+}
+
+struct Maps {
+  PreparedMap room = PrepareMap(Room());
+  PreparedMap partitioned = PrepareMap(PartitionedRoom());
+  Pose2 copy_frame{2.0, -1.0, 0.7};  // the copy's own frame in the room's
+  PreparedMap copy = PrepareMap(MovedCopy(Room(), copy_frame));
+};
+
+const Maps& TheMaps() {
+  static const Maps* maps = new Maps();
+  return *maps;
+}
+
+const Pose2 kQueryPose{4.0, 2.5, 0.3};  // the query's own frame in the room's
+
+double Logistic(const ConfidenceOptions& o, double best, double margin) {
+  return 1.0 / (1.0 + std::exp(-(o.bias + o.score_weight * best + o.margin_weight * margin)));
+}
+
+// --- Disagreement ---------------------------------------------------------
+
+TEST(ConfidenceTest, TheHandMadeMapsHaveFreeSpace) {
+  EXPECT_GT(TheMaps().room.occupancy.Count(CellState::kFree), 0u);
+  EXPECT_TRUE(InFreeSpace(TheMaps().room, {5.0, 3.0}));
+  EXPECT_FALSE(InFreeSpace(TheMaps().room, {5.0, 1.0}));  // 2 m from the trajectory: unknown
+}
+
+TEST(ConfidenceTest, AMapAtItsOwnPoseDoesNotDisagreeWithItself) {
+  EXPECT_EQ(Disagreement(TheMaps().room, TheMaps().room, Pose2{}), 0.0);
+  // Nor with a copy of it in another frame, placed where it belongs.
+  EXPECT_EQ(Disagreement(TheMaps().room, TheMaps().copy, TheMaps().copy_frame), 0.0);
+}
+
+TEST(ConfidenceTest, WallsInTheOtherMapsFreeSpaceAreDisagreement) {
+  const Maps& m = TheMaps();
+  // The partition (6 m of 38 m of wall) lies in the room's free space.
+  const double d = Disagreement(m.room, m.partitioned, Pose2{});
+  EXPECT_GT(d, 0.1);
+  EXPECT_LT(d, 0.3);
+  // The larger of the two directions: the same either way round.
+  EXPECT_DOUBLE_EQ(Disagreement(m.partitioned, m.room, Pose2{}), d);
+  // The room's own walls, shifted 3 m so that its bottom wall crosses its free space.
+  EXPECT_GT(Disagreement(m.room, m.room, {0.0, 3.0, 0.0}), 0.05);
+}
+
+// Only points the other map observed (near its points or in its free space)
+// count: a map that reaches far beyond the other does not dilute the
+// contradiction where they overlap.
+TEST(ConfidenceTest, WhatTheOtherMapNeverObservedDoesNotDiluteAContradiction) {
+  const Maps& m = TheMaps();
+  LocalMap longer = PartitionedRoom();
+  AddWall(&longer.points, {10.5, 0}, {40, 0});  // a 30 m corridor east of the room: 3 times the room's walls
+  AddWall(&longer.points, {10.5, 6}, {40, 6});
+  AddWall(&longer.points, {40, 0}, {40, 6});
+  const PreparedMap extended = PrepareMap(longer);
+  const double local = Disagreement(m.room, m.partitioned, Pose2{});
+  EXPECT_NEAR(Disagreement(m.room, extended, Pose2{}), local, 0.02);
+  EXPECT_GT(Disagreement(m.room, extended, Pose2{}), ConfidenceOptions{}.max_disagreement);
+}
+
+TEST(ConfidenceTest, MapsThatDoNotOverlapCannotDisagree) {
+  const Maps& m = TheMaps();
+  EXPECT_EQ(Disagreement(m.room, m.partitioned, {100.0, 0.0, 0.0}), 0.0);
+  EXPECT_EQ(Disagreement(m.room, m.partitioned, {0.0, -50.0, 1.0}), 0.0);
+}
+
+// Maps without scans or trajectory have no free space: nothing can
+// contradict them, and they contradict nothing.
+TEST(ConfidenceTest, MapsWithoutFreeSpaceNeverDisagree) {
+  const PreparedMap room = PreparePoints(Room().points), partitioned = PreparePoints(PartitionedRoom().points);
+  EXPECT_EQ(Disagreement(room, partitioned, Pose2{}), 0.0);
+  EXPECT_EQ(Disagreement(room, room, {0.0, 3.0, 0.0}), 0.0);
+}
+
+// --- Judge ------------------------------------------------------------------
+
+TEST(JudgeTest, ALoneStrongHitIsSure) {
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  const Verdict v = Judge(&hits);
+  EXPECT_TRUE(v.sure);
+  EXPECT_DOUBLE_EQ(v.best_score, 0.9);
+  EXPECT_EQ(v.rival_score, 0.0);
+  EXPECT_EQ(v.agreeing, 0u);
+  EXPECT_TRUE(hits[0].agrees_with_best);  // the best agrees with itself
+  // The documented logistic, the margin being the whole score.
+  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}, 0.9, 0.9), 1e-12);
+  EXPECT_GT(v.confidence, 0.99);
+}
+
+TEST(JudgeTest, NoHitsIsNeverSure) {
+  std::vector<JudgedHit> none;
+  const Verdict v = Judge(&none);
+  EXPECT_FALSE(v.sure);
+  EXPECT_EQ(v.best_score, 0.0);
+  EXPECT_EQ(v.confidence, 0.0);
+  std::vector<JudgedHit> unmapped = {{0.9, kQueryPose, nullptr, false}};
+  EXPECT_FALSE(Judge(&unmapped).sure);
+}
+
+TEST(JudgeTest, BelowMinScoreIsNeverSure) {
+  for (double score : {0.0, 0.3, 0.59}) {
+    std::vector<JudgedHit> hits = {{score, kQueryPose, &TheMaps().room, false}};
+    const Verdict v = Judge(&hits);
+    EXPECT_FALSE(v.sure) << score;  // the margin (the whole score, no rival) is not enough
+    EXPECT_DOUBLE_EQ(v.best_score, score);
+  }
+  std::vector<JudgedHit> at = {{0.6, kQueryPose, &TheMaps().room, false}};
+  EXPECT_TRUE(Judge(&at).sure);  // min_score itself is enough
+  ConfidenceOptions strict;
+  strict.min_score = 0.95;
+  std::vector<JudgedHit> strong = {{0.9, kQueryPose, &TheMaps().room, false}};
+  EXPECT_FALSE(Judge(&strong, strict).sure);
+}
+
+TEST(JudgeTest, ADisagreeingHitWithinTheMarginIsARival) {
+  const Maps& m = TheMaps();
+  ASSERT_GT(Disagreement(m.room, m.partitioned, Pose2{}), ConfidenceOptions{}.max_disagreement);
+  // The query fits both rooms at the same pose: the partition would cross the room's free space.
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.8, kQueryPose, &m.partitioned, false}};
+  const Verdict v = Judge(&hits);
+  EXPECT_FALSE(v.sure);
+  EXPECT_DOUBLE_EQ(v.best_score, 0.9);
+  EXPECT_DOUBLE_EQ(v.rival_score, 0.8);
+  EXPECT_EQ(v.agreeing, 0u);
+  EXPECT_TRUE(hits[0].agrees_with_best);
+  EXPECT_FALSE(hits[1].agrees_with_best);
+  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}, 0.9, 0.1), 1e-12);
+}
+
+TEST(JudgeTest, ADisagreeingHitBeyondTheMarginLeavesItSure) {
+  const Maps& m = TheMaps();
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.65, kQueryPose, &m.partitioned, false}};
+  const Verdict v = Judge(&hits);
+  EXPECT_TRUE(v.sure);  // margin 0.25 >= 0.2
+  EXPECT_DOUBLE_EQ(v.rival_score, 0.65);
+  EXPECT_FALSE(hits[1].agrees_with_best);
+  // The best rival counts: one more within the margin overturns it.
+  hits.push_back({0.85, kQueryPose, &m.partitioned, false});
+  const Verdict w = Judge(&hits);
+  EXPECT_FALSE(w.sure);
+  EXPECT_DOUBLE_EQ(w.rival_score, 0.85);
+}
+
+// Another map of the same place, with the query at the pose that puts the
+// two maps' walls together, supports the best hit: it is no rival however
+// close its score.
+TEST(JudgeTest, AnAgreeingHitCountsAndIsNoRival) {
+  const Maps& m = TheMaps();
+  const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);  // the query's pose in the copy
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.89, in_copy, &m.copy, false}};
+  const Verdict v = Judge(&hits);
+  EXPECT_TRUE(v.sure);
+  EXPECT_EQ(v.agreeing, 1u);
+  EXPECT_EQ(v.rival_score, 0.0);
+  EXPECT_TRUE(hits[1].agrees_with_best);
+  // The same map at a pose 3 m off puts its walls through the room: a rival.
+  std::vector<JudgedHit> shifted = {{0.9, kQueryPose, &m.room, false},
+                                    {0.89, Compose(in_copy, {0.0, -3.0, 0.0}), &m.copy, false}};
+  const Verdict w = Judge(&shifted);
+  EXPECT_FALSE(w.sure);
+  EXPECT_EQ(w.agreeing, 0u);
+  EXPECT_DOUBLE_EQ(w.rival_score, 0.89);
+  EXPECT_FALSE(shifted[1].agrees_with_best);
+}
+
+TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  const Verdict close = Judge(&hits, {}, 0.75);
+  EXPECT_FALSE(close.sure);
+  EXPECT_DOUBLE_EQ(close.rival_score, 0.75);
+  const Verdict far = Judge(&hits, {}, 0.65);
+  EXPECT_TRUE(far.sure);
+  EXPECT_DOUBLE_EQ(far.rival_score, 0.65);
+  // The larger of the self rival and the disagreeing hits is the rival.
+  std::vector<JudgedHit> two = {{0.9, kQueryPose, &TheMaps().room, false},
+                                {0.8, kQueryPose, &TheMaps().partitioned, false}};
+  EXPECT_DOUBLE_EQ(Judge(&two, {}, 0.5).rival_score, 0.8);
+  EXPECT_DOUBLE_EQ(Judge(&two, {}, 0.85).rival_score, 0.85);
+}
+
+TEST(JudgeTest, ConfidenceGrowsWithTheMarginAndTheScore) {
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  double previous = 0.0;
+  for (double rival : {0.89, 0.85, 0.75, 0.7, 0.6, 0.4, 0.0}) {
+    const Verdict v = Judge(&hits, {}, rival);
+    EXPECT_GT(v.confidence, previous) << rival;
+    EXPECT_LT(v.confidence, 1.0);
+    previous = v.confidence;
+  }
+  previous = 0.0;
+  for (double best : {0.5, 0.6, 0.7, 0.8, 0.9, 1.0}) {  // the same margin 0.1
+    std::vector<JudgedHit> one = {{best, kQueryPose, &TheMaps().room, false}};
+    const Verdict v = Judge(&one, {}, best - 0.1);
+    EXPECT_GT(v.confidence, previous) << best;
+    previous = v.confidence;
+  }
+}
+
+// Scores exact in binary (0.75 - 0.5 is 0.25 exactly), so that the margin
+// can sit on the threshold.
+TEST(JudgeTest, TheMarginAndScoreThresholdsAreTheOptions) {
+  std::vector<JudgedHit> hits = {{0.75, kQueryPose, &TheMaps().room, false}};
+  ConfidenceOptions options;
+  options.min_margin = 0.25;
+  EXPECT_TRUE(Judge(&hits, options, 0.5).sure);  // margin >= min_margin
+  options.min_margin = 0.375;
+  EXPECT_FALSE(Judge(&hits, options, 0.5).sure);
+  options.min_margin = 0.05;
+  EXPECT_FALSE(Judge(&hits, {}, 0.625).sure);  // default 0.2
+  EXPECT_TRUE(Judge(&hits, options, 0.625).sure);
+  options.min_score = 0.75;
+  EXPECT_TRUE(Judge(&hits, options, 0.5).sure);  // min_score itself is enough
+  options.min_score = 0.875;
+  EXPECT_FALSE(Judge(&hits, options, 0.5).sure);
+}
+
+// Hits far below the best (best - agreement_window) are not compared: no
+// rival, and no place hit either.
+TEST(JudgeTest, HitsBelowTheAgreementWindowAreNotCompared) {
+  const Maps& m = TheMaps();
+  const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false},
+                                 {0.55, kQueryPose, &m.partitioned, false},
+                                 {0.55, in_copy, &m.copy, false}};
+  ConfidenceOptions tight;
+  tight.min_margin = 0.5;  // a rival at 0.55 would now overturn the verdict
+  const Verdict v = Judge(&hits, tight);
+  EXPECT_TRUE(v.sure);
+  EXPECT_EQ(v.rival_score, 0.0);
+  EXPECT_EQ(v.agreeing, 0u);
+  EXPECT_FALSE(hits[1].agrees_with_best);
+  EXPECT_FALSE(hits[2].agrees_with_best);
+  // Within a wider window both are compared: one rival, one agreeing.
+  tight.agreement_window = 0.4;
+  const Verdict w = Judge(&hits, tight);
+  EXPECT_FALSE(w.sure);
+  EXPECT_DOUBLE_EQ(w.rival_score, 0.55);
+  EXPECT_EQ(w.agreeing, 1u);
+  EXPECT_TRUE(hits[2].agrees_with_best);
+}
+
+// confidence.h: Judge "sets each hit's agrees_with_best" (an output field).
+// A hit judged again after its place in the ranking changed must not keep an
+// earlier answer.
+TEST(JudgeTest, EveryHitsAgreementIsSetEvenWhenNotCompared) {
+  const Maps& m = TheMaps();
+  const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.85, in_copy, &m.copy, false}};
+  Judge(&hits);
+  ASSERT_TRUE(hits[1].agrees_with_best);
+  hits[1].score = 0.4;  // rescored far below the best: no longer a place hit
+  const Verdict v = Judge(&hits);
+  EXPECT_EQ(v.agreeing, 0u);
+  EXPECT_FALSE(hits[1].agrees_with_best);
+}
+
+}  // namespace
+}  // namespace lmd
