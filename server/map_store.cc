@@ -18,6 +18,7 @@
 #include "core/describe/lmd_codec.h"
 #include "core/index/index.h"
 #include "core/index/postings.h"
+#include "core/localize/anchor_index.h"
 #include "proto/convert.h"
 #include "server/validate.h"
 
@@ -34,6 +35,7 @@ struct CollectionState {
   Index index;
   PlaceIndex places;
   std::unordered_map<uint64_t, MapSource::Route> routes;  // index id -> route, where known
+  AnchorIndex anchors;  // the maps anchored in the collection's frame
   // Index id -> map id. Ids grow with each insert, so the oldest map comes
   // first. A writer (holding MapStore::write_mutex_, as every writer of it
   // does) may read it without index_mutex.
@@ -645,6 +647,29 @@ bool MapStore::RouteOf(const std::string& collection, uint64_t index_id, MapSour
   if (it == state->routes.end()) return false;
   *route = it->second;
   return true;
+}
+
+std::optional<Pose2> MapStore::AnchorOf(const std::string& collection, uint64_t index_id) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return std::nullopt;
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  return state->anchors.Anchor(index_id);
+}
+
+std::vector<MapSource::Anchored> MapStore::AnchoredNear(const std::string& collection, const Point2& centre,
+                                                        double radius_m) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return {};
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  return state->anchors.Near(centre, radius_m);
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {

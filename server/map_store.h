@@ -26,6 +26,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <shared_mutex>
 #include <string>
@@ -150,6 +151,11 @@ class MapStore {
   // Its place on its robot's route (metadata robot_id and sequence, when
   // both are set: a sequence of 0 counts as unset); false if unknown.
   bool RouteOf(const std::string& collection, uint64_t index_id, MapSource::Route* route) const;
+  // Its anchor in the collection's frame (MapMetadata.anchor), if any.
+  std::optional<Pose2> AnchorOf(const std::string& collection, uint64_t index_id) const;
+  // The collection's anchored maps whose box meets the disk (AnchorIndex::Near).
+  std::vector<MapSource::Anchored> AnchoredNear(const std::string& collection, const Point2& centre,
+                                                double radius_m) const;
 
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in

@@ -1,5 +1,7 @@
 #include "server/store_map_source.h"
 
+#include <algorithm>
+
 #include "proto/convert.h"
 
 namespace lmd::server {
@@ -25,6 +27,19 @@ std::shared_ptr<const PreparedMap> StoreMapSource::Prepared(uint64_t map_id) con
 
 bool StoreMapSource::RouteOf(uint64_t map_id, Route* route) const {
   return store_->RouteOf(collection_, map_id, route);
+}
+
+std::optional<Pose2> StoreMapSource::AnchorOf(uint64_t map_id) const { return store_->AnchorOf(collection_, map_id); }
+
+std::vector<MapSource::Anchored> StoreMapSource::AnchoredNear(const Point2& centre, double radius_m) const {
+  std::vector<Anchored> near = store_->AnchoredNear(collection_, centre, radius_m);
+  near.erase(std::remove_if(near.begin(), near.end(),
+                            [&](const Anchored& a) {
+                              Result<IndexedEntry> entry = store_->Indexed(collection_, a.map_id);
+                              return !entry.ok() || excluded_.count(entry->map_id) != 0;
+                            }),
+             near.end());
+  return near;
 }
 
 }  // namespace lmd::server

@@ -29,6 +29,8 @@ class StoreMapSource : public MapSource {
                                       PlaceSearchStats* stats) const override;
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
   bool RouteOf(uint64_t map_id, Route* route) const override;
+  std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
+  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
 
  private:
   const MapStore* const store_;

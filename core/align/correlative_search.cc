@@ -127,6 +127,32 @@ class BranchAndBound {
 
 }  // namespace
 
+double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region) {
+  if (query_points.empty() || db.empty() || db.levels.empty()) return 0.0;
+  const double cell = db.options.cell_m;
+  Point2 centroid{0, 0};
+  for (const Point2& p : query_points) centroid.x += p.x, centroid.y += p.y;
+  centroid.x /= query_points.size(), centroid.y /= query_points.size();
+  Rotation r;
+  r.theta = region.theta;
+  const double c = std::cos(r.theta), s = std::sin(r.theta);
+  for (const Point2& p : query_points) {
+    const double qx = p.x - centroid.x, qy = p.y - centroid.y;
+    const double x = c * qx - s * qy + region.centroid_target.x, y = s * qx + c * qy + region.centroid_target.y;
+    r.cx.push_back(static_cast<int32_t>(std::clamp(std::floor((x - db.grid_origin.x) / cell), -1.0e8, 1.0e8)));
+    r.cy.push_back(static_cast<int32_t>(std::clamp(std::floor((y - db.grid_origin.y) / cell), -1.0e8, 1.0e8)));
+  }
+  const int wx = static_cast<int>(std::ceil(std::max(0.0, region.half_window_x_m) / cell));
+  const int wy = static_cast<int>(std::ceil(std::max(0.0, region.half_window_y_m) / cell));
+  int top = 0;
+  while (top + 1 < static_cast<int>(db.levels.size()) && (1 << top) < 2 * std::max(wx, wy) + 1) ++top;
+  int64_t best = 0;
+  for (int dx = -wx; dx <= wx; dx += 1 << top) {
+    for (int dy = -wy; dy <= wy; dy += 1 << top) best = std::max(best, ScoreAt(db.levels[top], r, dx, dy));
+  }
+  return static_cast<double>(best) / (255.0 * query_points.size());
+}
+
 CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, const PreparedMap& db,
                                     const std::vector<SearchRegion>& regions,
                                     const CorrelativeOptions& options) {

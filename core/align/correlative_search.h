@@ -53,6 +53,11 @@ struct CorrelativeResult {
   size_t evaluations = 0;  // block scores computed (a cost measure)
 };
 
+// An upper bound of CorrelativeSearch's score over `region` at its centre
+// angle (mean likelihood, [0, 1]), from the coarsest pyramid level whose
+// blocks cover the window: a cheap way to rank maps before searching them.
+double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region);
+
 // Best pose of `query_points` (query own frame) over all regions. The query
 // points should be few (subsample to ~0.2 m) since cost is linear in them.
 CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, const PreparedMap& db,

@@ -53,6 +53,10 @@ struct Verdict {
   double best_score = 0.0;
   double rival_score = 0.0;  // best disagreeing hit's score, or the best map's at another pose (0 if none)
   size_t agreeing = 0;       // other hits that agree with the best
+  bool prior_used = false;   // a prior query (prior.h)
+  bool prior_failed = false; // ... and no map near the prior matched
+  size_t sequence_maps = 0;      // a sequence query: its earlier maps
+  size_t sequence_agreeing = 0;  // ... of which fit the best hit's pose
 };
 
 // A verified hit as the verdict sees it.

@@ -6,16 +6,18 @@
 #include <unordered_map>
 
 #include "core/align/icp.h"
+#include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
-#include "core/viewpoint/orientation.h"
 
 namespace lmd {
+namespace localize_internal {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-// A scan match as a hit: its pose and verification score.
+}  // namespace
+
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options) {
   LocalizedHit hit;
   hit.pose = m.pose;
@@ -29,7 +31,6 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
   return hit;
 }
 
-// The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options) {
   ScanMatch m;
   m.pose = pose;
@@ -38,15 +39,93 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
   return Scored(query, db, m, options);
 }
 
-// One stored map to verify: its hypotheses' poses, best first.
-struct Candidate {
-  uint64_t map_id = 0;
-  std::vector<Pose2> guesses;
-  double votes = 0.0;
-  size_t first_rank = 0;
-};
+std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
+                                           const std::vector<Candidate>& candidates, const LocalizeOptions& options,
+                                           const ScanMatchOptions& match, const std::function<bool()>& stop,
+                                           LocalizeStats* stats) {
+  const auto t = Clock::now();
+  std::vector<LocalizedHit> hits;
+  for (const Candidate& c : candidates) {
+    if (stop && stop()) break;
+    std::shared_ptr<const PreparedMap> db = source.Prepared(c.map_id);
+    if (!db) continue;  // deleted meanwhile
+    ScanMatch m;
+    if (stats->maps_matched < options.whole_map_maps) {
+      std::vector<double> thetas;
+      for (const Pose2& g : c.guesses) thetas.push_back(g.theta), thetas.push_back(g.theta + M_PI);
+      m = MatchLocalMapsAtTurns(query.match, *db, thetas, match);
+    } else {
+      m = MatchLocalMaps(query.match, *db, c.guesses, match);
+    }
+    ++stats->maps_matched;
+    LocalizedHit hit = Scored(query, *db, m, options);
+    hit.map_id = c.map_id;
+    hit.votes = c.votes;
+    hit.first_stage_rank = c.first_rank;
+    hit.db = std::move(db);
+    hits.push_back(std::move(hit));
+  }
+  // Equal scores (a map that explains every query point, and its route
+  // neighbour that does too): the one that explains them more closely first.
+  std::stable_sort(hits.begin(), hits.end(), [](const LocalizedHit& a, const LocalizedHit& b) {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
+    return a.map_id < b.map_id;
+  });
+  stats->verify_ms += MsSince(t);
+  return hits;
+}
 
-}  // namespace
+void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
+              const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
+              Localization* out) {
+  auto t = Clock::now();
+  if (!hits.empty() && options.refine_best) {
+    LocalizedHit& best = hits[0];
+    const Pose2 refined_pose = RefinePose(query.match.points, *best.db, best.pose, options.refine);
+    LocalizedHit refined = ScoredAt(query, *best.db, refined_pose, options);
+    if (refined.score >= best.score) {
+      refined.map_id = best.map_id, refined.votes = best.votes, refined.first_stage_rank = best.first_stage_rank;
+      refined.db = best.db;
+      best = std::move(refined);
+    }
+  }
+  std::vector<JudgedHit> judged;
+  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
+  out->verdict = Judge(&judged, options.confidence);
+  // Only a sure verdict can be overturned by another pose of the best map.
+  if (out->verdict.sure && second_pose) {
+    const double second = second_pose(hits[0]);
+    if (second > 0) out->verdict = Judge(&judged, options.confidence, second);
+  }
+  for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
+  out->stats.verdict_ms += MsSince(t);
+
+  if (with_changes && out->verdict.sure) {
+    t = Clock::now();
+    std::vector<AlignedMap> place;
+    for (const LocalizedHit& h : hits) {
+      if (h.agrees_with_best && h.score >= out->verdict.best_score - options.confidence.agreement_window) {
+        place.push_back({h.db.get(), h.pose, h.map_id});
+      }
+    }
+    out->changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,
+                                    options.changes);
+    out->stats.changes_ms += MsSince(t);
+  }
+  if (hits.size() > options.top_k) hits.resize(options.top_k);
+  out->hits = std::move(hits);
+}
+
+void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits) {
+  for (LocalizedHit& h : *hits) {
+    if (const std::optional<Pose2> anchor = source.AnchorOf(h.map_id)) h.collection_pose = Compose(*anchor, h.pose);
+  }
+}
+
+}  // namespace localize_internal
+
+using namespace localize_internal;
 
 PreparedPlace PreparePlace(const LocalMap& map, const LocalizeOptions& options) {
   PreparedPlace p;
@@ -65,22 +144,16 @@ LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const
   return q;
 }
 
-Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
-                      const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
-                      bool with_changes) {
-  Localization out;
-  auto t = Clock::now();
-  const std::vector<PlaceHypothesis> hypotheses =
-      source.Search(query.features, options.search, excluded, &out.stats.search);
-  out.stats.hypotheses = hypotheses.size();
-  out.stats.search_ms = MsSince(t);
+namespace {
 
-  // The maps to verify, in order of their best hypothesis, each with all
-  // its hypotheses as guesses; route neighbours of chosen maps passed over.
-  t = Clock::now();
+// The maps to verify, in order of their best hypothesis, each with all its
+// hypotheses as guesses; route neighbours of chosen maps passed over.
+std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
+                                                           const std::vector<PlaceHypothesis>& hypotheses,
+                                                           const LocalizeOptions& options) {
   std::vector<Candidate> candidates;
   std::vector<MapSource::Route> chosen_routes;
-  std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; npos: passed over
+  std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; kPassed: passed over
   constexpr size_t kPassed = static_cast<size_t>(-1);
   for (size_t r = 0; r < hypotheses.size(); ++r) {
     const PlaceHypothesis& h = hypotheses[r];
@@ -104,82 +177,41 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
     }
     if (it->second != kPassed) candidates[it->second].guesses.push_back(HypothesisPose(h, query.map->heading));
   }
-  std::vector<LocalizedHit> hits;
-  for (const Candidate& c : candidates) {
-    if (stop && stop()) break;
-    std::shared_ptr<const PreparedMap> db = source.Prepared(c.map_id);
-    if (!db) continue;  // deleted meanwhile
-    ScanMatch match;
-    if (out.stats.maps_matched < options.whole_map_maps) {
-      std::vector<double> thetas;
-      for (const Pose2& g : c.guesses) thetas.push_back(g.theta), thetas.push_back(g.theta + M_PI);
-      match = MatchLocalMapsAtTurns(query.match, *db, thetas, options.match);
-    } else {
-      match = MatchLocalMaps(query.match, *db, c.guesses, options.match);
-    }
-    LocalizedHit hit = Scored(query, *db, match, options);
-    ++out.stats.maps_matched;
-    if (hits.size() < options.guess_free_maps) {
-      LocalizedHit global = Scored(query, *db, MatchLocalMapsGlobal(query.match, *db, options.match), options);
-      if (global.score > hit.score) hit = global;
-    }
-    hit.map_id = c.map_id;
-    hit.votes = c.votes;
-    hit.first_stage_rank = c.first_rank;
-    hit.db = std::move(db);
-    hits.push_back(std::move(hit));
-  }
-  // Equal scores (a map that explains every query point, and its route
-  // neighbour that does too): the one that explains them more closely first.
-  std::stable_sort(hits.begin(), hits.end(), [](const LocalizedHit& a, const LocalizedHit& b) {
-    if (a.score != b.score) return a.score > b.score;
-    if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
-    return a.map_id < b.map_id;
-  });
-  out.stats.verify_ms = MsSince(t);
+  return candidates;
+}
 
-  t = Clock::now();
-  if (!hits.empty()) {
-    LocalizedHit& best = hits[0];
-    if (options.refine_best) {
-      LocalizedHit refined = ScoredAt(query, *best.db, RefinePose(query.match.points, *best.db, best.pose, options.refine),
-                                      options);
-      if (refined.score >= best.score) {
-        refined.map_id = best.map_id, refined.votes = best.votes, refined.first_stage_rank = best.first_stage_rank;
-        refined.db = best.db;
-        best = std::move(refined);
-      }
-    }
-  }
-  std::vector<JudgedHit> judged;
-  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
-  out.verdict = Judge(&judged, options.confidence);
-  // Only a sure verdict can be overturned by another pose of the best map.
-  if (out.verdict.sure && options.self_rival_radius_m > 0) {
-    const LocalizedHit& best = hits[0];
-    const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
-                                             options.self_rival_angle_deg, options.match);
-    if (second.score > 0) {
-      out.verdict = Judge(&judged, options.confidence, Scored(query, *best.db, second, options).score);
-    }
-  }
-  for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
-  out.stats.verdict_ms = MsSince(t);
+}  // namespace
 
-  if (with_changes && out.verdict.sure) {
-    t = Clock::now();
-    std::vector<AlignedMap> place;
-    for (const LocalizedHit& h : hits) {
-      if (h.agrees_with_best && h.score >= out.verdict.best_score - options.confidence.agreement_window) {
-        place.push_back({h.db.get(), h.pose, h.map_id});
-      }
-    }
-    out.changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,
-                                   options.changes);
-    out.stats.changes_ms = MsSince(t);
+namespace localize_internal {
+
+std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
+                                          const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
+                                          const std::function<bool()>& stop, LocalizeStats* stats) {
+  const auto t = Clock::now();
+  const std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
+  stats->hypotheses = hypotheses.size();
+  stats->search_ms += MsSince(t);
+  const std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options);
+  return VerifyCandidates(query, source, candidates, options, options.match, stop, stats);
+}
+
+}  // namespace localize_internal
+
+Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                      const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
+                      bool with_changes) {
+  Localization out;
+  std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, stop, &out.stats);
+  std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
+  if (options.self_rival_radius_m > 0) {
+    second_pose = [&](const LocalizedHit& best) {
+      const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
+                                               options.self_rival_angle_deg, options.match);
+      return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
+    };
   }
-  if (hits.size() > options.top_k) hits.resize(options.top_k);
-  out.hits = std::move(hits);
+  Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
+  SetCollectionPoses(source, &out.hits);
   return out;
 }
 

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/align/icp.h"
@@ -57,10 +58,6 @@ struct LocalizeOptions {
     m.quarter_turns = false;
     return m;
   }();
-  // The first `guess_free_maps` maps verified are also matched guess-free
-  // (the whole map, turns from the compasses), keeping the better match: a
-  // hypothesis may hold a look-alike pose within the right map.
-  size_t guess_free_maps = 0;
   // The first `whole_map_maps` maps verified are searched over their whole
   // extent at their hypotheses' turns and the half turns of those (the
   // votes' translation may name a look-alike stretch of the same corridor),
@@ -95,6 +92,16 @@ struct LocalizeOptions {
     return c;
   }();
   size_t top_k = 10;  // hits returned
+  // Prior queries (prior.h): anchored maps matched, nearest the predicted
+  // query first, and the window beyond the prior's radius.
+  size_t prior_maps = 4;
+  double prior_margin_m = 1.0;
+  // Sequence queries (sequence.h): hypotheses of the newest map checked
+  // against the earlier maps; odometry drift allowed per metre travelled
+  // (position, m/m; heading, rad/m) on top of the scan matching window.
+  size_t sequence_hypotheses = 8;
+  double sequence_drift = 0.03;
+  double sequence_drift_rad_per_m = 0.02;
 };
 
 // What the pipeline computes once per stored map (lmdd: at insert): the map
@@ -129,6 +136,8 @@ struct LocalizedHit {
   double votes = 0.0;            // first-stage votes of its best hypothesis
   size_t first_stage_rank = 0;   // rank of its best hypothesis (0 = first)
   bool agrees_with_best = false; // a place hit: consistent with the best hit (confidence.h)
+  std::optional<Pose2> collection_pose;  // the query's own frame in the collection's frame (anchored maps)
+  size_t sequence_agreeing = 0;  // sequence queries: earlier maps that fit this hypothesis
   std::shared_ptr<const PreparedMap> db;
 };
 

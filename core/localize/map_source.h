@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/align/prepared_map.h"
@@ -38,6 +39,19 @@ class MapSource {
     uint64_t sequence = 0;
   };
   virtual bool RouteOf(uint64_t map_id, Route* route) const = 0;
+
+  // Maps anchored in the collection's frame (a site map; anchor_index.h).
+  struct Anchored {
+    uint64_t map_id = 0;
+    Pose2 pose;     // the map's own frame in the collection's frame
+    Point2 lo, hi;  // its bounding box in the collection's frame
+    std::vector<Point2> path;  // where its robot drove (collection frame, about 1 m apart)
+  };
+  // The anchor of `map_id`, if it has one (default: no map is anchored).
+  // Thread-safe.
+  virtual std::optional<Pose2> AnchorOf(uint64_t /*map_id*/) const { return std::nullopt; }
+  // Anchored maps whose box meets the disk (collection frame). Thread-safe.
+  virtual std::vector<Anchored> AnchoredNear(const Point2& /*centre*/, double /*radius_m*/) const { return {}; }
 };
 
 }  // namespace lmd

@@ -2,11 +2,12 @@
 
 namespace lmd {
 
-Status MemoryCollection::Add(uint64_t id, PreparedPlace place, std::optional<Route> route) {
+Status MemoryCollection::Add(uint64_t id, PreparedPlace place, std::optional<Route> route,
+                             std::vector<Pose2> trajectory) {
   if (maps_.count(id) != 0) return Status::AlreadyExists("map " + std::to_string(id) + " is already stored");
   Status added = index_.Add(id, std::move(place.features));
   if (!added.ok()) return added;
-  maps_[id] = {std::move(place.map), route};
+  maps_[id] = {std::move(place.map), route, std::move(trajectory)};
   return Status::Ok();
 }
 
@@ -25,6 +26,19 @@ bool MemoryCollection::RouteOf(uint64_t map_id, Route* route) const {
   const auto it = maps_.find(map_id);
   if (it == maps_.end() || !it->second.route) return false;
   *route = *it->second.route;
+  return true;
+}
+
+std::optional<Pose2> MemoryCollection::AnchorOf(uint64_t map_id) const { return anchors_.Anchor(map_id); }
+
+std::vector<MapSource::Anchored> MemoryCollection::AnchoredNear(const Point2& centre, double radius_m) const {
+  return anchors_.Near(centre, radius_m);
+}
+
+bool MemoryCollection::SetAnchor(uint64_t id, const Pose2& pose) {
+  const auto it = maps_.find(id);
+  if (it == maps_.end()) return false;
+  anchors_.Set(id, pose, it->second.map->min_corner, it->second.map->max_corner, it->second.trajectory);
   return true;
 }
 

@@ -8,6 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/localize/anchor_index.h"
 #include "core/localize/localizer.h"
 #include "core/localize/map_source.h"
 #include "core/place/place_index.h"
@@ -18,24 +19,34 @@ namespace lmd {
 class MemoryCollection : public MapSource {
  public:
   // Stores a map under `id` (PreparePlace's result), with its place on its
-  // robot's route if known (MapSource::Route). AlreadyExists or
-  // PlaceIndex::Add's errors; nothing changes on error. Not thread-safe.
-  Status Add(uint64_t id, PreparedPlace place, std::optional<Route> route = std::nullopt);
+  // robot's route if known (MapSource::Route) and its trajectory (own frame;
+  // where it is anchored, prior queries prefer maps whose robot drove where
+  // the query's did). AlreadyExists or PlaceIndex::Add's errors; nothing
+  // changes on error. Not thread-safe.
+  Status Add(uint64_t id, PreparedPlace place, std::optional<Route> route = std::nullopt,
+             std::vector<Pose2> trajectory = {});
 
   std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
                                       const std::function<bool(uint64_t)>& excluded,
                                       PlaceSearchStats* stats) const override;
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
   bool RouteOf(uint64_t map_id, Route* route) const override;
+  std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
+  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
+
+  // Anchors a stored map in the collection's frame; false if not stored.
+  bool SetAnchor(uint64_t id, const Pose2& pose);
 
   const PlaceIndex& index() const { return index_; }
   size_t size() const { return maps_.size(); }
 
  private:
   PlaceIndex index_;
+  AnchorIndex anchors_;
   struct Stored {
     std::shared_ptr<const PreparedMap> map;
     std::optional<Route> route;
+    std::vector<Pose2> trajectory;
   };
   std::unordered_map<uint64_t, Stored> maps_;
 };

@@ -1,0 +1,34 @@
+// Prior queries: a robot that tracks its pose sends it, with its
+// uncertainty, in the collection's frame. Only the anchored maps that can
+// overlap the prior region are matched, each in a window around the pose the
+// prior implies in it, so that a look-alike elsewhere on the site cannot
+// win and the answer costs a few scan matches instead of a search.
+#pragma once
+
+#include <functional>
+
+#include "core/localize/localizer.h"
+
+namespace lmd {
+
+struct Prior {
+  Pose2 pose;                      // the query map's own frame in the collection's frame
+  double radius_m = 2.0;           // position uncertainty, m (> 0)
+  double heading_sigma_rad = 0.35; // heading uncertainty, rad (>= 0)
+};
+
+// InvalidArgument naming what is wrong: a non-finite pose, a radius that is
+// not positive (or beyond 100 m), a negative or non-finite heading sigma.
+Status ValidatePrior(const Prior& prior);
+
+// Localises `query` near `prior` among `source`'s anchored maps (the prior
+// disk grown by the query's own extent). Hits carry collection_pose. The
+// verdict's rivals are the other maps' disagreeing hits and the best map at
+// another pose within the prior window. verdict.prior_failed when no map
+// scores options.confidence.min_score there: the robot's prior is wrong (or
+// the place is new); it may then ask without a prior.
+Localization LocalizeNear(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                          const Prior& prior, const std::function<bool(uint64_t)>& excluded = {},
+                          const std::function<bool()>& stop = {}, bool with_changes = false);
+
+}  // namespace lmd

@@ -1,0 +1,51 @@
+// The steps the localisation entry points share (localizer.h, prior.h,
+// sequence.h): scan matching of chosen maps, ranking, and the verdict with
+// its change masks. Internal to core/localize.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/localize/localizer.h"
+
+namespace lmd::localize_internal {
+
+// A stored map to verify and where to look in it.
+struct Candidate {
+  uint64_t map_id = 0;
+  std::vector<Pose2> guesses;  // query own frame in the map's own frame
+  double votes = 0.0;          // first stage (0 when it did not run)
+  size_t first_rank = 0;
+};
+
+// The hit of a scan match: its pose, shares and verification score.
+LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options);
+// The hit at `pose`, measured as verification measures (no search).
+LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
+
+// Scan matches each candidate near its guesses with `match` (options.match,
+// or a wider window), best hits first (score, then the closer fit, then the
+// map id). Stops once `stop` says so; counts into stats.
+std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
+                                           const std::vector<Candidate>& candidates, const LocalizeOptions& options,
+                                           const ScanMatchOptions& match, const std::function<bool()>& stop,
+                                           LocalizeStats* stats);
+
+// The first stage and the verification of the maps it names (route
+// neighbours passed over), best hits first: Localize without its verdict.
+std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
+                                          const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
+                                          const std::function<bool()>& stop, LocalizeStats* stats);
+
+// The best hit refined, the verdict (with `second_pose`, when set and the
+// verdict would be sure: the best map's score at another pose, a rival),
+// the change masks when asked and sure, and the hits cut to top_k.
+void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
+              const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
+              Localization* out);
+
+// Sets each hit's collection_pose from its map's anchor, where it has one.
+void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits);
+
+}  // namespace lmd::localize_internal
