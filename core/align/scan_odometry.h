@@ -1,0 +1,40 @@
+// Poses from the scans alone, for recordings without odometry or tf: each
+// scan is scan-matched (scan_match.h) against a reference built from the
+// last keyframe scans, starting from a constant-velocity guess. Drifts like
+// any odometry, but over a 5 m local map it stays within a few centimetres
+// on real indoor logs (docs/bags.md).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/align/scan_match.h"
+#include "core/types.h"
+
+namespace lmd {
+
+struct ScanOdometryOptions {
+  // A scan this far (m) or this much turned (deg) from the last keyframe becomes one.
+  double keyframe_distance_m = 0.3;
+  double keyframe_angle_deg = 10.0;
+  size_t reference_keyframes = 8;  // the reference map holds the last this many keyframes' points
+  double point_cell_m = 0.05;      // m; a scan's endpoints kept one per cell
+  // A match scoring below this (fraction of the scan's points within
+  // inlier_radius_m of the reference) is not trusted: the guess is kept.
+  double min_score = 0.3;
+  // Searched around the constant-velocity guess: a laser at 1-40 Hz moves
+  // less than this between scans; sparse logs (one scan per 0.5 m) turn up to ~20 deg.
+  double window_m = 1.0;
+  double window_deg = 20.0;
+};
+
+struct ScanOdometry {
+  std::vector<Pose2> poses;  // one per scan: laser pose, the first scan at (0, 0, 0)
+  size_t weak_matches = 0;   // scans whose match scored below min_score (pose = guess)
+  double mean_score = 0.0;   // mean match score over the scans after the first
+};
+
+// Laser poses of `scans` (their own poses are ignored), in the first scan's frame.
+ScanOdometry EstimateScanOdometry(const std::vector<Scan>& scans, const ScanOdometryOptions& options = {});
+
+}  // namespace lmd
