@@ -18,13 +18,17 @@ constexpr char kUsage[] =
     "  list --collection C                                         list a collection's maps (alias: maps)\n"
     "  collections                                                 list collections\n"
     "  ingest --collection C --log FILE [--robot R]                local maps of a CARMEN log (5 m every 1 m), inserted\n"
+    "  ingest --collection C --bag PATH [BAG OPTIONS]              local maps of a bag (MCAP, rosbag2 dir or .db3, ROS 1 .bag)\n"
     "  query --collection C QUERY [--top-k N] [--method M]         stored maps showing the query's place\n"
     "  changes --collection C QUERY [--top-k N] [--method M]       hits with their ranked change masks\n"
     "  render --collection C QUERY --out FILE.svg                  picture of the top hit and its changes\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
-    "QUERY is --file POINTS or --log FILE --map K; M is default, lmd-cor, lmd-cog or bow;\n"
+    "QUERY is --file POINTS, --log FILE --map K or --bag PATH --map K; M is default, lmd-cor, lmd-cog or bow;\n"
+    "BAG OPTIONS: --scan-topic T, --odom-topic T or --frame F (tf frame, e.g. map) choose the scans and poses (default:\n"
+    "the only LaserScan topic; tf map, else the only Odometry topic, else tf odom, else scan matching);\n"
+    "--scan-matching poses by scan matching; --allow-nan reads NaN ranges as no return; --salvage reads a cut-off file.\n"
     "--exclude ID[,ID...] leaves those stored maps out of query / changes / render hits;\n"
     "--verify N verifies the index's best N hits geometrically (default: the server's, 10; more when lost);\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
@@ -73,7 +77,7 @@ std::string Required(const Args& args, const std::string& key) {
 }
 
 int Main(int argc, char** argv) {
-  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h"});
+  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage"});
   if (!args.ok()) return Fail(args.status().message(), 2);
   if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {
     std::fputs(kUsage, args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? stderr : stdout);
@@ -84,7 +88,8 @@ int Main(int argc, char** argv) {
   if (args->positional.size() > 1) return Fail("unexpected argument '" + args->positional[1] + "'", 2);
   const Status known = CheckKnownOptions(
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
-              "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir"});
+              "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
+              "bag", "scan-topic", "odom-topic", "frame"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

@@ -32,8 +32,9 @@ template <typename Request>
 int FillQuery(const CommandContext& ctx, Request* request) {
   request->set_collection(Required(ctx.args, "collection"));
   if (request->collection().empty()) return 2;
-  Result<LocalMap> map = QueryMapFromArgs(ctx.args);
-  if (!map.ok()) return Fail(map.status().message(), map.status().code() == Status::Code::kInvalidArgument ? 2 : 1);
+  bool usage_error = false;
+  Result<LocalMap> map = QueryMapFromArgs(ctx.args, &usage_error);
+  if (!map.ok()) return Fail(map.status().message(), usage_error ? 2 : 1);
   *request->mutable_map() = ToProto(*map);
   Result<long> top_k = GetPositive(ctx.args, "top-k", 10);
   if (!top_k.ok()) return Fail(top_k.status().message(), 2);
@@ -69,10 +70,13 @@ constexpr const char* kReducedDepthNote =
 
 int IngestCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
-  if (collection.empty() || Required(ctx.args, "log").empty()) return 2;
-  Result<std::vector<LocalMap>> maps = LocalMapsFromLog(ctx.args);
-  if (!maps.ok()) return Fail(maps.status().message());
-  ProgressBar progress("ingest " + ctx.args.Get("log"), maps->size());
+  const bool bag = ctx.args.Has("bag");
+  if (collection.empty() || (bag ? Required(ctx.args, "bag") : Required(ctx.args, "log")).empty()) return 2;
+  BagLogSummary summary;
+  Result<std::vector<LocalMap>> maps = bag ? LocalMapsFromBag(ctx.args, &summary) : LocalMapsFromLog(ctx.args);
+  if (!maps.ok()) return Fail(maps.status().message() + " (no map stored)");
+  const std::string source = bag ? ctx.args.Get("bag") : ctx.args.Get("log");
+  ProgressBar progress("ingest " + source, maps->size());
   size_t evicted = 0;  // by the collection's cap (retain_maps_per_collection)
   for (size_t i = 0; i < maps->size(); ++i) {
     v1::InsertMapsRequest request;
@@ -86,7 +90,9 @@ int IngestCommand(const CommandContext& ctx) {
     const grpc::Status status = ctx.client.InsertMaps(request, &response);
     if (!status.ok()) {
       progress.Abandon();
-      return FailCall(status);
+      return FailCall(grpc::Status(status.error_code(), status.error_message() + " (" + std::to_string(i) + " of " +
+                                                            std::to_string(maps->size()) +
+                                                            " maps were stored before it)"));
     }
     evicted += static_cast<size_t>(response.evicted_size());
     if (ctx.json) {  // as soon as lmdd acknowledged it
@@ -98,6 +104,15 @@ int IngestCommand(const CommandContext& ctx) {
     progress.Add();
   }
   progress.Done();
+  if (bag) {
+    if (ctx.json) {
+      std::printf("%s\n", BagSummaryJsonLine(source, summary, maps->size()).c_str());
+    } else {
+      std::printf("%s: %s; scans %s (%zu read, %zu without a pose); poses: %s; laser: %s\n", source.c_str(),
+                  summary.format.c_str(), summary.scan_topic.c_str(), summary.scans_read,
+                  summary.scans_without_pose, summary.pose_source.c_str(), summary.laser_mounting.c_str());
+    }
+  }
   if (!ctx.json) std::printf("ingested %zu local maps into '%s'\n", maps->size(), collection.c_str());
   if (!ctx.json && evicted > 0) {
     std::printf("lmdd evicted the collection's %zu oldest maps to keep within its cap\n", evicted);

@@ -46,7 +46,21 @@ ScanOdometry EstimateScanOdometry(const std::vector<Scan>& scans, const ScanOdom
     LocalMap query;
     query.points = own_points(scans[i]);
     Pose2 pose = guess;
-    const ScanMatch m = MatchLocalMaps(PrepareQuery(query, match), reference, {guess}, match);
+    const PreparedQuery prepared = PrepareQuery(query, match);
+    ScanMatch m = MatchLocalMaps(prepared, reference, {guess}, match);
+    if (m.score < options.retry_below) {
+      // A turn beyond the window (sparse logs keep one scan per 30 deg
+      // turned): guesses turned by multiples of the window, up to max_turn_deg
+      // (not beyond: in a corridor the scan turned by 180 deg fits as well).
+      std::vector<Pose2> fan;
+      const double step = 2 * options.window_deg * M_PI / 180;
+      for (int k = 1; (k - 0.5) * step < options.max_turn_deg * M_PI / 180; ++k) {
+        fan.push_back({guess.x, guess.y, guess.theta + k * step});
+        fan.push_back({guess.x, guess.y, guess.theta - k * step});
+      }
+      const ScanMatch wide = MatchLocalMaps(prepared, reference, fan, match);
+      if (wide.score > m.score) m = wide;
+    }
     if (m.score >= options.min_score) {
       pose = m.pose;
     } else {

@@ -22,6 +22,12 @@ struct ScanOdometryOptions {
   // A match scoring below this (fraction of the scan's points within
   // inlier_radius_m of the reference) is not trusted: the guess is kept.
   double min_score = 0.3;
+  // A match scoring below this is searched again with guesses turned by
+  // multiples of the window, up to max_turn_deg from the constant-velocity
+  // guess: the best score wins. intel's log, one scan per 0.5 m or 30 deg,
+  // turns by at most 36 deg between scans.
+  double retry_below = 0.7;
+  double max_turn_deg = 60.0;
   // Searched around the constant-velocity guess: a laser at 1-40 Hz moves
   // less than this between scans; sparse logs (one scan per 0.5 m) turn up to ~20 deg.
   double window_m = 1.0;

@@ -107,7 +107,6 @@ Result<LaserLog> BagLaserLog(BagReader& bag, const BagLogOptions& options, BagLo
   BagLogSummary local;
   BagLogSummary& sum = summary ? *summary : local;
   sum = BagLogSummary{};
-  sum.format = bag.format();
   const std::vector<BagTopic>& topics = bag.topics();
   Result<size_t> scan_topic = ChooseTopic(bag, options.scan_topic, kLaserScan, "--scan-topic");
   if (!scan_topic.ok()) return scan_topic.status();
@@ -192,6 +191,7 @@ Result<LaserLog> BagLaserLog(BagReader& bag, const BagLogOptions& options, BagLo
     return Status::Ok();
   });
   if (!read.ok()) return read;
+  sum.format = bag.format();  // after reading: chunk compressions are known then
   sum.scans_read = scans.size();
   if (scans.empty()) return Status::InvalidArgument(bag.path() + ": topic " + sum.scan_topic + " has no messages");
 
