@@ -130,10 +130,12 @@ Result<LaserLog> BagLaserLog(BagReader& bag, const BagLogOptions& options, BagLo
   std::vector<std::vector<OdomSample>> odom(topics.size());
   std::vector<std::pair<TransformStampedMessage, bool>> tf;  // (transform, static)
   const float max_range_cap = options.max_usable_range;
+  std::vector<uint64_t> numbers(topics.size(), 0);  // messages seen per topic: errors count within a topic
   Status read = bag.ReadMessages(wanted, [&](const BagMessage& m) -> Status {
     const BagTopic& topic = topics[m.topic];
+    const uint64_t number = ++numbers[m.topic];
     auto fail = [&](const std::string& what) {
-      return Status::InvalidArgument(bag.path() + ": " + topic.name + " message " + std::to_string(m.number) + " (" +
+      return Status::InvalidArgument(bag.path() + ": " + topic.name + " message " + std::to_string(number) + " (" +
                                      m.where + "): " + what);
     };
     if (m.topic == *scan_topic) {
@@ -147,7 +149,7 @@ Result<LaserLog> BagLaserLog(BagReader& bag, const BagLogOptions& options, BagLo
       RawScan raw;
       raw.stamp = msg->stamp_ns != 0 ? msg->stamp_ns : m.log_time_ns;
       raw.frame = FrameName(msg->frame_id);
-      raw.number = m.number;
+      raw.number = number;
       raw.where = m.where;
       Scan& s = raw.scan;
       s.first_angle = msg->angle_min;
@@ -175,7 +177,7 @@ Result<LaserLog> BagLaserLog(BagReader& bag, const BagLogOptions& options, BagLo
       o.transform.frame_id = FrameName(msg->frame_id);
       o.transform.child_frame_id = FrameName(msg->child_frame_id);
       o.transform.transform = msg->pose;
-      o.number = m.number;
+      o.number = number;
       o.where = m.where;
       odom[m.topic].push_back(std::move(o));
       return Status::Ok();

@@ -7,7 +7,7 @@
 #include <set>
 
 #include "core/io/byte_cursor.h"
-#include "core/io/decompress.h"
+#include "core/io/compression.h"
 
 namespace lmd {
 namespace {

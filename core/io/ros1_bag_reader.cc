@@ -5,7 +5,7 @@
 #include <set>
 
 #include "core/io/byte_cursor.h"
-#include "core/io/decompress.h"
+#include "core/io/compression.h"
 
 namespace lmd {
 namespace {
@@ -143,8 +143,10 @@ class Ros1BagReader : public BagReader {
     return Status::Corruption(path() + ": offset " + std::to_string(offset) + ": " + what);
   }
 
-  // The record at `at` from the file: header fields and data.
-  Status ReadRecord(uint64_t at, Record* r) {
+  // The record at `at` from the file: header fields and data. With
+  // count_sized_index, an index-data record's data is count * 12 bytes
+  // whatever its length field says (some recorders wrote a wrong one).
+  Status ReadRecord(uint64_t at, Record* r, bool count_sized_index = false) {
     std::string len;
     Status s = source_->Read(at, 4, "a record's header length", &len);
     if (!s.ok()) return s;
@@ -158,9 +160,15 @@ class Ros1BagReader : public BagReader {
     s = source_->Read(at + 4 + header_len, 4, "a record's data length", &len);
     if (!s.ok()) return s;
     ByteCursor(len).U32(&data_len);
+    if (!r->fields.Parse(r->header_bytes)) return Error(at, "record header fields are malformed");
+    uint8_t op = 0;
+    uint32_t count = 0;
+    if (count_sized_index && r->fields.Number("op", &op) && op == kIndexData && r->fields.Number("count", &count) &&
+        static_cast<uint64_t>(count) * 12 <= kMaxHeaderBytes * 64ull) {
+      data_len = count * 12;
+    }
     s = source_->Read(at + 8 + header_len, data_len, "a record's data", &r->data);
     if (!s.ok()) return s;
-    if (!r->fields.Parse(r->header_bytes)) return Error(at, "record header fields are malformed");
     r->at = at;
     r->end = at + 8 + header_len + data_len;
     return Status::Ok();
@@ -276,7 +284,7 @@ class Ros1BagReader : public BagReader {
     uint64_t at = data_start_;
     while (at < source_->size()) {
       Record r;
-      Status s = ReadRecord(at, &r);
+      Status s = ReadRecord(at, &r, /*count_sized_index=*/true);
       if (!s.ok()) {
         if (options_.salvage_truncated && s.code() == Status::Code::kCorruption) break;
         return s;
@@ -287,12 +295,6 @@ class Ros1BagReader : public BagReader {
         s = Chunk(r, conns, on_message);
       } else if (op == kConnection) {
         s = Connection(r.fields, r.data, at);
-      } else if (op == kIndexData) {
-        // Some recorders wrote a wrong data length here: trust count (12 bytes per entry) when they disagree.
-        uint32_t count = 0;
-        if (r.fields.Number("count", &count) && static_cast<uint64_t>(count) * 12 != r.data.size()) {
-          r.end = r.end - r.data.size() + static_cast<uint64_t>(count) * 12;
-        }
       } else if (op == kMessageData) {
         return Error(at, "message record outside a chunk (not a rosbag v2.0 layout)");
       }

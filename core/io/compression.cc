@@ -1,4 +1,4 @@
-#include "core/io/decompress.h"
+#include "core/io/compression.h"
 
 #include <bzlib.h>
 #include <lz4frame.h>
@@ -39,7 +39,7 @@ Status Zstd(std::string_view in, uint64_t expected, const std::string& what, std
     if (ZSTD_isError(last)) return Status::Corruption(what + ": zstd: " + ZSTD_getErrorName(last));
     if (probing && output.pos > 0) return WrongSize(what, "zstd", expected, expected, true);
     if (!probing) produced = output.pos;
-    if (input.pos == input.size && output.pos < output.size) break;  // input used up, decoder drained
+    if (input.pos == input.size && (last == 0 || output.pos < output.size)) break;  // input used up, decoder drained
     if (input.pos == before_in && output.pos == before_out) break;
   }
   if (last != 0) return Status::Corruption(what + ": zstd data ends inside a frame (truncated chunk)");
@@ -142,6 +142,41 @@ Status Decompress(Compression compression, std::string_view in, uint64_t expecte
     case Compression::kBz2: return Bz2(in, expected_size, what, out);
   }
   return Status::Internal(what + ": unknown compression");
+}
+
+Status Compress(Compression compression, std::string_view in, std::string* out) {
+  out->clear();
+  switch (compression) {
+    case Compression::kNone:
+      out->assign(in.data(), in.size());
+      return Status::Ok();
+    case Compression::kZstd: {
+      out->resize(ZSTD_compressBound(in.size()));
+      const size_t n = ZSTD_compress(out->data(), out->size(), in.data(), in.size(), 3);
+      if (ZSTD_isError(n)) return Status::Internal(std::string("zstd: ") + ZSTD_getErrorName(n));
+      out->resize(n);
+      return Status::Ok();
+    }
+    case Compression::kLz4Frame: {
+      LZ4F_preferences_t prefs{};
+      prefs.frameInfo.contentSize = in.size();
+      out->resize(LZ4F_compressFrameBound(in.size(), &prefs));
+      const size_t n = LZ4F_compressFrame(out->data(), out->size(), in.data(), in.size(), &prefs);
+      if (LZ4F_isError(n)) return Status::Internal(std::string("lz4: ") + LZ4F_getErrorName(n));
+      out->resize(n);
+      return Status::Ok();
+    }
+    case Compression::kBz2: {
+      unsigned int size = static_cast<unsigned int>(in.size() + in.size() / 100 + 600);
+      out->resize(size);
+      const int rc = BZ2_bzBuffToBuffCompress(out->data(), &size, const_cast<char*>(in.data()),
+                                              static_cast<unsigned int>(in.size()), 9, 0, 0);
+      if (rc != BZ_OK) return Status::Internal("bzip2: error " + std::to_string(rc));
+      out->resize(size);
+      return Status::Ok();
+    }
+  }
+  return Status::Internal("unknown compression");
 }
 
 }  // namespace lmd

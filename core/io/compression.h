@@ -1,5 +1,5 @@
-// Decompression of bag chunks (MCAP: zstd, lz4; ROS 1: lz4, bz2) into a
-// buffer of the size the chunk declares. Output grows only as bytes are
+// Compression of bag chunks (MCAP: zstd, lz4; ROS 1: lz4, bz2). Decompression
+// fills a buffer of the size the chunk declares, growing only as bytes are
 // produced, so a chunk that claims gigabytes but holds little costs little.
 #pragma once
 
@@ -24,5 +24,9 @@ const char* CompressionName(Compression c);
 // (its size must match too).
 Status Decompress(Compression compression, std::string_view in, uint64_t expected_size, uint64_t max_size,
                   const std::string& what, std::string* out);
+
+// Compresses `in` into one zstd frame, one LZ4 frame or one bzip2 stream
+// (kNone copies). Internal if the library fails.
+Status Compress(Compression compression, std::string_view in, std::string* out);
 
 }  // namespace lmd
