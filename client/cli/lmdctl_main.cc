@@ -21,6 +21,7 @@ constexpr char kUsage[] =
     "  ingest --collection C --bag PATH [BAG OPTIONS]              local maps of a bag (MCAP, rosbag2 dir or .db3, ROS 1 .bag)\n"
     "  query --collection C QUERY [--top-k N] [--method M]         stored maps showing the query's place\n"
     "  changes --collection C QUERY [--top-k N] [--method M]       hits with their ranked change masks\n"
+    "        (query / changes --mcap OUT.mcap: the answer for Foxglove, Lichtblick or ros2 bag play)\n"
     "  render --collection C QUERY --out FILE.svg                  picture of the top hit and its changes\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
@@ -89,7 +90,7 @@ int Main(int argc, char** argv) {
   const Status known = CheckKnownOptions(
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
               "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
-              "bag", "scan-topic", "odom-topic", "frame"});
+              "bag", "scan-topic", "odom-topic", "frame", "mcap"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

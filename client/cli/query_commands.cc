@@ -8,6 +8,7 @@
 #include "client/cli/commands.h"
 #include "client/cli/output.h"
 #include "client/cli/query_map.h"
+#include "client/cli/result_mcap.h"
 #include "core/render/result_svg.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -135,6 +136,10 @@ int QueryCommand(const CommandContext& ctx) {
   }
   if (!ctx.json && response.hits_size() == 0) std::printf("no map of '%s' matches\n", request.collection().c_str());
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
+  if (ctx.args.Has("mcap")) {
+    return WriteResultMcap(ctx, request.collection(), request.map(), {response.hits().begin(), response.hits().end()},
+                           {});
+  }
   return 0;
 }
 
@@ -166,6 +171,15 @@ int ChangesCommand(const CommandContext& ctx) {
     }
   }
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
+  if (ctx.args.Has("mcap")) {
+    std::vector<v1::MapHit> hits;
+    std::vector<std::vector<v1::ChangeMask>> masks;
+    for (const auto& hit : response.hits()) {
+      hits.push_back(hit.hit());
+      masks.emplace_back(hit.masks().begin(), hit.masks().end());
+    }
+    return WriteResultMcap(ctx, request.collection(), request.map(), hits, masks);
+  }
   return 0;
 }
 
