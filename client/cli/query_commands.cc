@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "client/cli/commands.h"
+#include "client/cli/insert_maps.h"
 #include "client/cli/output.h"
 #include "client/cli/query_map.h"
 #include "client/cli/result_mcap.h"
@@ -77,34 +78,12 @@ int IngestCommand(const CommandContext& ctx) {
   Result<std::vector<LocalMap>> maps = bag ? LocalMapsFromBag(ctx.args, &summary) : LocalMapsFromLog(ctx.args);
   if (!maps.ok()) return Fail(maps.status().message() + " (no map stored)");
   const std::string source = bag ? ctx.args.Get("bag") : ctx.args.Get("log");
-  ProgressBar progress("ingest " + source, maps->size());
   size_t evicted = 0;  // by the collection's cap (retain_maps_per_collection)
-  for (size_t i = 0; i < maps->size(); ++i) {
-    v1::InsertMapsRequest request;
-    v1::InsertMapRequest* insert = request.add_maps();
-    insert->mutable_metadata()->set_collection(collection);
-    insert->mutable_metadata()->set_map_id((*maps)[i].id);
-    insert->mutable_metadata()->set_robot_id(ctx.args.Get("robot"));
-    insert->mutable_metadata()->set_sequence(i);
-    *insert->mutable_map() = ToProto((*maps)[i]);
-    v1::InsertMapsResponse response;
-    const grpc::Status status = ctx.client.InsertMaps(request, &response);
-    if (!status.ok()) {
-      progress.Abandon();
-      return FailCall(grpc::Status(status.error_code(), status.error_message() + " (" + std::to_string(i) + " of " +
-                                                            std::to_string(maps->size()) +
-                                                            " maps were stored before it)"));
-    }
-    evicted += static_cast<size_t>(response.evicted_size());
-    if (ctx.json) {  // as soon as lmdd acknowledged it
-      std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
-                  collection.c_str(), response.maps(0).point_count());
-      for (const auto& meta : response.evicted()) std::printf("%s\n", EvictedJsonLine(meta).c_str());
-      std::fflush(stdout);
-    }
-    progress.Add();
+  std::vector<Pose2> anchors;  // --anchor: each map's first pose in the log's frame, as its pose hint
+  if (ctx.args.Switch("anchor")) {
+    for (const LocalMap& m : *maps) anchors.push_back(m.truth.global_frame);
   }
-  progress.Done();
+  if (int code = InsertLocalMaps(ctx, collection, *maps, anchors, "ingest " + source, &evicted)) return code;
   if (bag) {
     if (ctx.json) {
       std::printf("%s\n", BagSummaryJsonLine(source, summary, maps->size()).c_str());

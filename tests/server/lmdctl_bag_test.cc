@@ -1,6 +1,7 @@
 // lmdctl with bags: ingest --bag (MCAP, ROS 1, rosbag2) as a user runs it,
 // query --bag, the errors of bad bags, and --mcap results read back by our
 // reader and by one we did not write (npm's @mcap/core, when installed).
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -8,6 +9,7 @@
 
 #include "core/io/bag.h"
 #include "core/io/carmen_writer.h"
+#include "core/io/nav2_map.h"
 #include "core/io/mcap_writer.h"
 #include "core/sim/simulate.h"
 #include "tests/core/bag_test_writers.h"
@@ -143,6 +145,60 @@ TEST_F(LmdctlBagTest, ChangesWritesAnMcapThatAnIndependentReaderDecodes) {
                                "\"transforms\":[\"query -> hit_1\"", "\"qos\":\"transient local\""}) {
     EXPECT_NE(json.find(expected), std::string::npos) << expected << "\n" << json;
   }
+}
+
+// ---------------------------------------------------------------------------
+// Nav2 maps in and out.
+
+TEST_F(LmdctlBagTest, ANav2MapImportedAndExportedKeepsItsWallsAndFrame) {
+  OccupancyMap room;  // 16 m x 11 m, walls around, free inside
+  room.resolution = 0.05;
+  room.origin = {-3.0, -2.0, 0.0};
+  room.width = 360, room.height = 260;
+  room.cells.assign(static_cast<size_t>(room.width) * room.height, OccupancyMap::kUnknown);
+  for (int y = 20; y < 240; ++y) {
+    for (int x = 20; x < 340; ++x) {
+      const bool wall = x == 20 || x == 339 || y == 20 || y == 239 || (x == 180 && y < 160);
+      room.cells[static_cast<size_t>(y) * room.width + x] = wall ? OccupancyMap::kOccupied : OccupancyMap::kFree;
+    }
+  }
+  ASSERT_TRUE(WriteNav2Map(dir_.path() + "/room.yaml", room).ok());
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  CliRun imported = RunLmdctl(base + "--json import-map --collection site --yaml " + dir_.path() + "/room.yaml", dir_);
+  ASSERT_EQ(imported.exit_code, 0) << imported.err;
+  EXPECT_EQ(imported.out.rfind("{\"id\":\"room-0-0\"", 0), 0u) << imported.out;
+  const int tiles = Lines(imported.out);
+  EXPECT_GE(tiles, 4);
+  CliRun exported = RunLmdctl(base + "export-map --collection site --out " + dir_.path() + "/back.yaml", dir_);
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_NE(exported.out.find("from " + std::to_string(tiles) + " anchored maps"), std::string::npos) << exported.out;
+  Result<OccupancyMap> back = ReadNav2Map(dir_.path() + "/back.yaml");
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  // The room's corners in the map frame are walls in the export too (same frame, within a cell).
+  for (const auto& [ix, iy] : std::vector<std::pair<int, int>>{{20, 20}, {339, 239}, {180, 100}, {100, 239}}) {
+    const Point2 c = room.CellCentre(ix, iy);
+    const int bx = static_cast<int>(std::floor((c.x - back->origin.x) / back->resolution));
+    const int by = static_cast<int>(std::floor((c.y - back->origin.y) / back->resolution));
+    bool wall = false;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        wall = wall || (bx + dx >= 0 && by + dy >= 0 && bx + dx < back->width && by + dy < back->height &&
+                        back->at(bx + dx, by + dy) == OccupancyMap::kOccupied);
+      }
+    }
+    EXPECT_TRUE(wall) << "cell " << ix << ", " << iy;
+  }
+  // One stored map in its own frame, and a collection without anchored maps.
+  EXPECT_EQ(RunLmdctl(base + "export-map --collection site --id room-0-0 --out " + dir_.path() + "/one.yaml", dir_)
+                .exit_code,
+            0);
+  ASSERT_EQ(RunLmdctl(base + "ingest --collection logs --log " + dir_.path() + "/robot.log", dir_).exit_code, 0);
+  CliRun none = RunLmdctl(base + "export-map --collection logs --out " + dir_.path() + "/none.yaml", dir_);
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.err.find("collection 'logs' has no anchored maps"), std::string::npos) << none.err;
+  ASSERT_EQ(RunLmdctl(base + "ingest --anchor --collection anchored --bag " + dir_.path() + "/robot.mcap", dir_).exit_code, 0);
+  EXPECT_EQ(RunLmdctl(base + "export-map --collection anchored --out " + dir_.path() + "/run.yaml", dir_).exit_code, 0);
 }
 
 }  // namespace
