@@ -83,18 +83,9 @@ class SplitBag : public BagReader {
  public:
   SplitBag(std::string path, std::vector<std::unique_ptr<BagReader>> parts)
       : path_(std::move(path)), parts_(std::move(parts)) {
-    std::map<std::string, size_t> by_key;
     for (auto& part : parts_) {
       std::vector<size_t> mapping;
-      for (const BagTopic& t : part->topics()) {
-        auto [it, added] = by_key.emplace(t.name + '\0' + t.type, topics_.size());
-        if (added) {
-          topics_.push_back(t);
-          topics_.back().message_count = 0;
-        }
-        topics_[it->second].message_count += t.message_count;
-        mapping.push_back(it->second);
-      }
+      for (const BagTopic& t : part->topics()) mapping.push_back(topics_.Add(t.name, t.type, t.encoding_name, t.message_count));
       maps_.push_back(std::move(mapping));
     }
   }
@@ -102,10 +93,9 @@ class SplitBag : public BagReader {
   std::string format() const override {
     return "rosbag2 directory of " + std::to_string(parts_.size()) + " files (" + parts_[0]->format() + ")";
   }
-  const std::vector<BagTopic>& topics() const override { return topics_; }
+  const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
   Status ReadMessages(const std::vector<size_t>& wanted,
                       const std::function<Status(const BagMessage&)>& on_message) override {
-    uint64_t number = 0;
     for (size_t p = 0; p < parts_.size(); ++p) {
       std::vector<size_t> local;
       for (size_t i = 0; i < maps_[p].size(); ++i) {
@@ -115,7 +105,6 @@ class SplitBag : public BagReader {
       Status s = parts_[p]->ReadMessages(local, [&](const BagMessage& m) {
         BagMessage out = m;
         out.topic = mapping[m.topic];
-        out.number = ++number;
         out.where = parts_[p]->path() + " " + m.where;
         return on_message(out);
       });
@@ -128,7 +117,7 @@ class SplitBag : public BagReader {
   std::string path_;
   std::vector<std::unique_ptr<BagReader>> parts_;
   std::vector<std::vector<size_t>> maps_;  // per part: its topic index -> ours
-  std::vector<BagTopic> topics_;
+  TopicTable topics_;
 };
 
 Result<std::unique_ptr<BagReader>> OpenDirectory(const std::string& dir, const BagReadOptions& options) {
@@ -171,6 +160,22 @@ Result<std::unique_ptr<BagReader>> OpenDirectory(const std::string& dir, const B
 }
 
 }  // namespace
+
+size_t TopicTable::Add(const std::string& name, const std::string& type, const std::string& encoding_name,
+                       uint64_t count) {
+  auto [it, added] = by_key_.emplace(name + '\0' + type, topics_.size());
+  if (added) {
+    BagTopic t;
+    t.name = name;
+    t.type = type;
+    t.encoding_name = encoding_name;
+    t.encoding = encoding_name == "cdr" ? MessageEncoding::kCdr
+                 : encoding_name == "ros1" ? MessageEncoding::kRos1 : MessageEncoding::kOther;
+    topics_.push_back(std::move(t));
+  }
+  topics_[it->second].message_count += count;
+  return it->second;
+}
 
 Result<std::unique_ptr<BagReader>> OpenBag(const std::string& path, const BagReadOptions& options) {
   std::error_code ec;

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -31,7 +32,6 @@ struct BagMessage {
   size_t topic = 0;          // index into BagReader::topics()
   int64_t log_time_ns = 0;   // when the recorder received it
   std::string_view data;     // serialised message
-  uint64_t number = 0;       // 1-based, among the messages delivered so far (all topics asked for)
   std::string where;         // where it sits, for errors: "offset 1234", "chunk at offset 99", "row 17"
 };
 
@@ -59,6 +59,21 @@ class BagReader {
   // the first corruption found ("<path>: ... at offset N: what is wrong").
   virtual Status ReadMessages(const std::vector<size_t>& wanted,
                               const std::function<Status(const BagMessage&)>& on_message) = 0;
+};
+
+// The topics of a bag as readers collect them from channels (MCAP), connections
+// (ROS 1) or files (split rosbag2 bags): one per (name, type).
+class TopicTable {
+ public:
+  // Index of topic (name, type), added if new (its encoding from the name:
+  // "cdr", "ros1" or other); `count` messages are added to it.
+  size_t Add(const std::string& name, const std::string& type, const std::string& encoding_name, uint64_t count);
+  void AddMessages(size_t topic, uint64_t count) { topics_[topic].message_count += count; }
+  const std::vector<BagTopic>& topics() const { return topics_; }
+
+ private:
+  std::vector<BagTopic> topics_;
+  std::map<std::string, size_t> by_key_;
 };
 
 // Opens `path`: a directory holding a rosbag2 bag (metadata.yaml and its

@@ -47,7 +47,7 @@ class McapReader : public BagReader {
     f += has_summary_ ? ", summary" : ", no summary (scanned)";
     return f;
   }
-  const std::vector<BagTopic>& topics() const override { return topics_; }
+  const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
 
   Status Open() {
     std::string head;
@@ -71,7 +71,6 @@ class McapReader : public BagReader {
     for (const auto& [id, topic] : channel_topic_) {
       if (std::find(wanted.begin(), wanted.end(), topic) != wanted.end()) channels.insert(id);
     }
-    delivered_ = 0;
     if (channels.empty()) return Status::Ok();
     if (!chunks_.empty()) {
       for (const ChunkRef& chunk : chunks_) {
@@ -119,7 +118,6 @@ class McapReader : public BagReader {
     f.U8(&op), f.U64(&len);
     if (op != kFooter || len != kFooterBody) return Status::Ok();  // end magic without a footer: scan
     f.U64(&summary_start), f.U64(&summary_offset_start), f.U32(&summary_crc);
-    footer_found_ = true;
     if (summary_start == 0) return Status::Ok();
     if (summary_start < kMagicSize || summary_start > footer_at) {
       return Error(footer_at, "footer's summary_start " + std::to_string(summary_start) + " lies outside the file");
@@ -280,13 +278,14 @@ class McapReader : public BagReader {
   // One record of the data section (in_chunk: byte offset inside the chunk at `at`, or npos).
   Status Record(uint8_t op, std::string_view body, uint64_t at, uint64_t in_chunk, const std::set<uint16_t>& channels,
                 const std::function<Status(const BagMessage&)>* on_message) {
-    const std::string where = in_chunk == kNoChunk ? "offset " + std::to_string(at)
-                                                   : "byte " + std::to_string(in_chunk) + " of the chunk at offset " +
-                                                         std::to_string(at);
+    auto where = [&] {
+      return in_chunk == kNoChunk ? "offset " + std::to_string(at)
+                                  : "byte " + std::to_string(in_chunk) + " of the chunk at offset " + std::to_string(at);
+    };
     if (op == kSchema || op == kChannel) {
       if (channels_from_summary_) return Status::Ok();
       Status s = op == kSchema ? SchemaRecord(body, at) : ChannelRecord(body, at);
-      if (!s.ok()) return Status::Corruption(path() + ": " + where + ": " + (op == kSchema ? "schema" : "channel") +
+      if (!s.ok()) return Status::Corruption(path() + ": " + where() + ": " + (op == kSchema ? "schema" : "channel") +
                                              " record is truncated");
       return s;
     }
@@ -296,7 +295,7 @@ class McapReader : public BagReader {
     uint32_t sequence = 0;
     uint64_t log_time = 0, publish_time = 0;
     if (!in.U16(&channel) || !in.U32(&sequence) || !in.U64(&log_time) || !in.U64(&publish_time)) {
-      return Status::Corruption(path() + ": " + where + ": message record is truncated");
+      return Status::Corruption(path() + ": " + where() + ": message record is truncated");
     }
     if (on_message == nullptr) {  // the scan that finds channels
       if (!channels_from_summary_ || counts_.empty()) ++scanned_counts_[channel];
@@ -307,8 +306,7 @@ class McapReader : public BagReader {
     m.topic = channel_topic_.at(channel);
     m.log_time_ns = static_cast<int64_t>(std::min<uint64_t>(log_time, INT64_MAX));
     m.data = in.Rest();
-    m.number = ++delivered_;
-    m.where = where;
+    m.where = where();
     return (*on_message)(m);
   }
 
@@ -364,24 +362,11 @@ class McapReader : public BagReader {
 
   Status BuildTopics() {
     if (counts_.empty()) counts_ = scanned_counts_;
-    std::map<std::string, size_t> by_key;
     for (const auto& [id, channel] : channels_) {
       const auto schema = schemas_.find(channel.schema);
-      const std::string type = schema == schemas_.end() ? "" : schema->second;
-      const std::string key = channel.topic + '\0' + type;
-      auto [it, added] = by_key.emplace(key, topics_.size());
-      if (added) {
-        BagTopic t;
-        t.name = channel.topic;
-        t.type = type;
-        t.encoding_name = channel.encoding;
-        t.encoding = channel.encoding == "cdr" ? MessageEncoding::kCdr
-                     : channel.encoding == "ros1" ? MessageEncoding::kRos1 : MessageEncoding::kOther;
-        topics_.push_back(std::move(t));
-      }
       const auto n = counts_.find(id);
-      if (n != counts_.end()) topics_[it->second].message_count += n->second;
-      channel_topic_[id] = it->second;
+      channel_topic_[id] = topics_.Add(channel.topic, schema == schemas_.end() ? "" : schema->second,
+                                       channel.encoding, n == counts_.end() ? 0 : n->second);
     }
     return Status::Ok();
   }
@@ -395,7 +380,6 @@ class McapReader : public BagReader {
   std::unique_ptr<ByteSource> source_;
   BagReadOptions options_;
   std::string profile_;
-  bool footer_found_ = false;
   bool has_summary_ = false;
   bool channels_from_summary_ = false;
   std::map<uint16_t, uint64_t> scanned_counts_;
@@ -405,9 +389,8 @@ class McapReader : public BagReader {
   std::map<uint16_t, size_t> channel_topic_;
   std::vector<ChunkRef> chunks_;
   std::vector<std::string> chunk_compressions_;
-  std::vector<BagTopic> topics_;
+  TopicTable topics_;
   std::string buffer_;
-  uint64_t delivered_ = 0;
 };
 
 }  // namespace

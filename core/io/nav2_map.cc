@@ -1,5 +1,6 @@
 #include "core/io/nav2_map.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

@@ -69,7 +69,7 @@ class Ros1BagReader : public BagReader {
     f += indexed_ ? ", indexed" : ", unindexed (walked)";
     return f;
   }
-  const std::vector<BagTopic>& topics() const override { return topics_; }
+  const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
 
   Status Open() {
     std::string head;
@@ -112,7 +112,6 @@ class Ros1BagReader : public BagReader {
     for (const auto& [id, topic] : conn_topic_) {
       if (std::find(wanted.begin(), wanted.end(), topic) != wanted.end()) conns.insert(id);
     }
-    delivered_ = 0;
     if (conns.empty()) return Status::Ok();
     if (!indexed_) return Walk(conns, &on_message);
     for (const ChunkInfo& info : chunks_) {
@@ -271,7 +270,6 @@ class Ros1BagReader : public BagReader {
       m.topic = conn_topic_.at(conn);
       m.log_time_ns = static_cast<int64_t>(time & 0xffffffffu) * 1000000000 + static_cast<int64_t>(time >> 32);
       m.data = data;
-      m.number = ++delivered_;
       m.where = "byte " + std::to_string(inner) + " of the chunk at offset " + std::to_string(chunk.at);
       s = (*on_message)(m);
       if (!s.ok()) return s;
@@ -306,20 +304,9 @@ class Ros1BagReader : public BagReader {
 
   void BuildTopics() {
     if (counts_.empty()) counts_ = walked_counts_;
-    std::map<std::string, size_t> by_key;
     for (const auto& [conn, c] : connections_) {
-      auto [it, added] = by_key.emplace(c.topic + '\0' + c.type, topics_.size());
-      if (added) {
-        BagTopic t;
-        t.name = c.topic;
-        t.type = c.type;
-        t.encoding = MessageEncoding::kRos1;
-        t.encoding_name = "ros1";
-        topics_.push_back(std::move(t));
-      }
       const auto n = counts_.find(conn);
-      if (n != counts_.end()) topics_[it->second].message_count += n->second;
-      conn_topic_[conn] = it->second;
+      conn_topic_[conn] = topics_.Add(c.topic, c.type, "ros1", n == counts_.end() ? 0 : n->second);
     }
   }
 
@@ -336,9 +323,8 @@ class Ros1BagReader : public BagReader {
   std::map<uint32_t, size_t> conn_topic_;
   std::vector<ChunkInfo> chunks_;
   std::vector<std::string> compressions_;
-  std::vector<BagTopic> topics_;
+  TopicTable topics_;
   std::string buffer_;
-  uint64_t delivered_ = 0;
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 
@@ -43,7 +44,7 @@ class SqliteReader : public BagReader {
 
   const std::string& path() const override { return name_; }
   std::string format() const override { return "rosbag2 SQLite3"; }
-  const std::vector<BagTopic>& topics() const override { return topics_; }
+  const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
 
   Status Load() {
     Statement topics;
@@ -53,15 +54,9 @@ class SqliteReader : public BagReader {
     }
     int rc;
     while ((rc = sqlite3_step(topics.get())) == SQLITE_ROW) {
-      BagTopic t;
-      const int64_t id = sqlite3_column_int64(topics.get(), 0);
-      t.name = Text(topics.get(), 1);
-      t.type = Text(topics.get(), 2);
-      t.encoding_name = Text(topics.get(), 3);
-      t.encoding = t.encoding_name == "cdr" ? MessageEncoding::kCdr
-                   : t.encoding_name == "ros1" ? MessageEncoding::kRos1 : MessageEncoding::kOther;
-      ids_.push_back(id);
-      topics_.push_back(std::move(t));
+      // One topic per row (rosbag2 makes names unique): the table index is the row's.
+      ids_.push_back(sqlite3_column_int64(topics.get(), 0));
+      rows_.push_back(topics_.Add(Text(topics.get(), 1), Text(topics.get(), 2), Text(topics.get(), 3), 0));
     }
     if (rc != SQLITE_DONE) return Failed("reading the topics table");
     Statement counts;
@@ -72,7 +67,7 @@ class SqliteReader : public BagReader {
     while ((rc = sqlite3_step(counts.get())) == SQLITE_ROW) {
       const int64_t id = sqlite3_column_int64(counts.get(), 0);
       for (size_t i = 0; i < ids_.size(); ++i) {
-        if (ids_[i] == id) topics_[i].message_count = static_cast<uint64_t>(sqlite3_column_int64(counts.get(), 1));
+        if (ids_[i] == id) topics_.AddMessages(rows_[i], static_cast<uint64_t>(sqlite3_column_int64(counts.get(), 1)));
       }
     }
     if (rc != SQLITE_DONE) return Failed("counting messages");
@@ -83,10 +78,10 @@ class SqliteReader : public BagReader {
                       const std::function<Status(const BagMessage&)>& on_message) override {
     std::string sql = "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN (";
     std::map<int64_t, size_t> topic_of;
-    for (size_t i = 0; i < wanted.size(); ++i) {
-      if (wanted[i] >= ids_.size()) continue;
-      topic_of[ids_[wanted[i]]] = wanted[i];
-      sql += (topic_of.size() > 1 ? "," : "") + std::to_string(ids_[wanted[i]]);
+    for (size_t i = 0; i < ids_.size(); ++i) {
+      if (std::find(wanted.begin(), wanted.end(), rows_[i]) == wanted.end()) continue;
+      topic_of[ids_[i]] = rows_[i];
+      sql += (topic_of.size() > 1 ? "," : "") + std::to_string(ids_[i]);
     }
     if (topic_of.empty()) return Status::Ok();
     sql += ") ORDER BY id";  // recording order, as MCAP and ROS 1 files keep it
@@ -104,7 +99,7 @@ class SqliteReader : public BagReader {
       const void* blob = sqlite3_column_blob(messages.get(), 3);
       const int bytes = sqlite3_column_bytes(messages.get(), 3);
       m.data = blob == nullptr ? std::string_view() : std::string_view(static_cast<const char*>(blob), bytes);
-      m.number = ++number;
+      ++number;
       m.where = "row id " + std::to_string(row);
       Status s = on_message(m);
       if (!s.ok()) return s;
@@ -128,8 +123,9 @@ class SqliteReader : public BagReader {
 
   sqlite3* db_;
   std::string name_;
-  std::vector<int64_t> ids_;
-  std::vector<BagTopic> topics_;
+  std::vector<int64_t> ids_;    // topics table rows: their ids
+  std::vector<size_t> rows_;    //   and their topic indices
+  TopicTable topics_;
 };
 
 Result<std::unique_ptr<BagReader>> Finish(sqlite3* db, int rc, const std::string& name) {
