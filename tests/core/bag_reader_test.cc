@@ -157,6 +157,23 @@ TEST(BagReaderTest, AnMcapCutAfterItsLastChunkIsScannedLikeACrashedRecordersFile
   ExpectSameLog(ShortLog(), *log);
 }
 
+TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
+  McapWriteOptions o;
+  o.chunk_bytes = 8 << 10;
+  const std::string full = McapBytes(BagFromLog(ShortLog(), MessageEncoding::kCdr), o);
+  const std::string cut = full.substr(0, full.size() / 2);
+  EXPECT_FALSE(ReadBytesAsMcap(cut).ok());
+  BagLogOptions salvage;
+  salvage.read.salvage_truncated = true;
+  Result<LaserLog> log = ReadBytesAsMcap(cut, salvage);
+  ASSERT_TRUE(log.ok()) << log.status().ToString();
+  ASSERT_GT(log->scans.size(), 10u);
+  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
+  LaserLog head = ShortLog();
+  head.scans.resize(log->scans.size());
+  ExpectSameLog(head, *log);
+}
+
 TEST(BagReaderTest, EveryRos1BagVariantReadsBackTheLog) {
   const TestBag bag = BagFromLog(ShortLog(), MessageEncoding::kRos1);
   struct Variant {
