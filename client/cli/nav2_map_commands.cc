@@ -12,20 +12,6 @@
 namespace lmd::cli {
 namespace {
 
-// A positive number of metres from --key, or the fallback; InvalidArgument naming it.
-Result<double> Metres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
-  if (!args.Has(key)) return fallback;
-  char* end = nullptr;
-  const std::string text = args.Get(key);
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !(v >= lo && v <= hi)) {
-    char range[96];
-    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g, got '", lo, hi);
-    return Status::InvalidArgument("--" + key + range + text + "'");
-  }
-  return v;
-}
-
 std::string Stem(const std::string& path) {
   std::string name = path.substr(path.find_last_of('/') + 1);
   const size_t dot = name.rfind('.');
@@ -39,9 +25,9 @@ int ImportMapCommand(const CommandContext& ctx) {
   const std::string yaml = collection.empty() ? "" : Required(ctx.args, "yaml");
   if (collection.empty() || yaml.empty()) return 2;
   MapTileOptions options;
-  Result<double> tile = Metres(ctx.args, "tile", options.tile_m, 2.0, 100.0);
+  Result<double> tile = GetMetres(ctx.args, "tile", options.tile_m, 2.0, 100.0);
   if (!tile.ok()) return Fail(tile.status().message(), 2);
-  Result<double> stride = Metres(ctx.args, "stride", *tile / 2, 0.5, 100.0);
+  Result<double> stride = GetMetres(ctx.args, "stride", *tile / 2, 0.5, 100.0);
   if (!stride.ok()) return Fail(stride.status().message(), 2);
   options.tile_m = *tile;
   options.stride_m = *stride;
@@ -66,7 +52,7 @@ int ExportMapCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
   const std::string out = collection.empty() ? "" : Required(ctx.args, "out");
   if (collection.empty() || out.empty()) return 2;
-  Result<double> resolution = Metres(ctx.args, "resolution", 0.05, 0.01, 1.0);
+  Result<double> resolution = GetMetres(ctx.args, "resolution", 0.05, 0.01, 1.0);
   if (!resolution.ok()) return Fail(resolution.status().message(), 2);
   std::vector<std::string> ids;
   std::vector<Pose2> frames;

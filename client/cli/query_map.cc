@@ -22,25 +22,12 @@ std::string LogName(const std::string& path) {
   return name;
 }
 
-// Metres in [lo, hi] (a step of 1 nm made ingest build maps for ever).
-Result<double> Metres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
-  if (!args.Has(key)) return fallback;
-  char* end = nullptr;
-  const std::string text = args.Get(key);
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !(value >= lo && value <= hi)) {
-    char range[64];
-    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g", lo, hi);
-    return Status::InvalidArgument("--" + key + range + ", got '" + text + "'");
-  }
-  return value;
-}
-
 // --length and --step; ids "<prefix>-<k>".
 Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args, const std::string& id_prefix) {
   LocalMapOptions options;
-  Result<double> length = Metres(args, "length", options.length_m, 0.5, 100.0);
-  Result<double> step = Metres(args, "step", options.step_m, 0.1, 100.0);
+  // Bounded: a step of 1 nm made ingest build maps for ever.
+  Result<double> length = GetMetres(args, "length", options.length_m, 0.5, 100.0);
+  Result<double> step = GetMetres(args, "step", options.step_m, 0.1, 100.0);
   if (!length.ok()) return length.status();
   if (!step.ok()) return step.status();
   options.length_m = *length;
