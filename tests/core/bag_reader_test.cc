@@ -9,6 +9,7 @@
 #include <unistd.h>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include <gtest/gtest.h>
 
@@ -18,6 +19,7 @@
 #include "core/io/carmen_reader.h"
 #include "core/io/carmen_writer.h"
 #include "core/io/mcap_reader.h"
+#include "core/io/ros_messages.h"
 #include "core/io/ros1_bag_reader.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
@@ -546,6 +548,43 @@ TEST(RealBagTest, TheNav2TurtlebotBagHasNoScansAndIsRefusedListingItsTopics) {
                             "/tf (tf2_msgs/msg/TFMessage, 5422)", "/tf_static (tf2_msgs/msg/TFMessage, 1)"}) {
     EXPECT_NE(log.status().message().find(topic), std::string::npos) << log.status().message();
   }
+}
+
+TEST(RealBagTest, TheNav2TurtlebotBagsZstdChunksDecodeToItsOdometryAndTf) {
+  REQUIRE_BAG("evo_nav2_turtlebot.mcap");
+  Result<std::unique_ptr<BagReader>> bag = OpenBag(path);
+  ASSERT_TRUE(bag.ok()) << bag.status().ToString();
+  std::vector<size_t> wanted;
+  for (size_t i = 0; i < (*bag)->topics().size(); ++i) {
+    if ((*bag)->topics()[i].name != "/amcl_pose") wanted.push_back(i);
+  }
+  std::map<std::string, size_t> decoded;
+  int64_t last_odom = 0;
+  size_t odom_backwards = 0;
+  Status read = (*bag)->ReadMessages(wanted, [&](const BagMessage& m) -> Status {
+    const BagTopic& topic = (*bag)->topics()[m.topic];
+    if (CanonicalType(topic.type) == "nav_msgs/Odometry") {
+      Result<OdometryMessage> o = DecodeOdometry(m.data, topic.encoding);
+      if (!o.ok()) return o.status();
+      odom_backwards += o->stamp_ns < last_odom;
+      last_odom = o->stamp_ns;
+      if (o->child_frame_id != "base_footprint" && o->child_frame_id != "base_link") {
+        return Status::Internal("odometry of " + o->child_frame_id);
+      }
+    } else {
+      Result<TfMessage> t = DecodeTfMessage(m.data, topic.encoding);
+      if (!t.ok()) return t.status();
+      if (t->transforms.empty()) return Status::Internal("an empty TFMessage");
+    }
+    ++decoded[topic.name];
+    return Status::Ok();
+  });
+  ASSERT_TRUE(read.ok()) << read.ToString();
+  EXPECT_NE((*bag)->format().find("zstd"), std::string::npos) << (*bag)->format();
+  EXPECT_EQ(decoded["/odom"], 2639u);
+  EXPECT_EQ(decoded["/tf"], 5422u);
+  EXPECT_EQ(decoded["/tf_static"], 1u);
+  EXPECT_EQ(odom_backwards, 0u);
 }
 
 TEST(RealBagTest, TheStageRos1BagGivesItsScansPosedByGroundTruth) {
