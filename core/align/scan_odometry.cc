@@ -46,19 +46,19 @@ ScanOdometry EstimateScanOdometry(const std::vector<Scan>& scans, const ScanOdom
     LocalMap query;
     query.points = own_points(scans[i]);
     Pose2 pose = guess;
+    // Around the guess, then around the guess turned by multiples of the
+    // window up to max_turn_deg (not beyond: in a corridor the scan turned by
+    // 180 deg fits as well); a turned match wins only if it scores higher.
     const PreparedQuery prepared = PrepareQuery(query, match);
     ScanMatch m = MatchLocalMaps(prepared, reference, {guess}, match);
-    if (m.score < options.retry_below) {
-      // A turn beyond the window (sparse logs keep one scan per 30 deg
-      // turned): guesses turned by multiples of the window, up to max_turn_deg
-      // (not beyond: in a corridor the scan turned by 180 deg fits as well).
-      std::vector<Pose2> fan;
-      const double step = 2 * options.window_deg * M_PI / 180;
-      for (int k = 1; (k - 0.5) * step < options.max_turn_deg * M_PI / 180; ++k) {
-        fan.push_back({guess.x, guess.y, guess.theta + k * step});
-        fan.push_back({guess.x, guess.y, guess.theta - k * step});
-      }
-      const ScanMatch wide = MatchLocalMaps(prepared, reference, fan, match);
+    std::vector<Pose2> turned;
+    const double step = 2 * options.window_deg * M_PI / 180;
+    for (int k = 1; (k - 0.5) * step < options.max_turn_deg * M_PI / 180; ++k) {
+      turned.push_back({guess.x, guess.y, guess.theta + k * step});
+      turned.push_back({guess.x, guess.y, guess.theta - k * step});
+    }
+    if (!turned.empty()) {
+      const ScanMatch wide = MatchLocalMaps(prepared, reference, turned, match);
       if (wide.score > m.score) m = wide;
     }
     if (m.score >= options.min_score) {
