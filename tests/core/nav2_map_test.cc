@@ -9,6 +9,8 @@
 #include <map>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "core/align/prepared_map.h"
@@ -21,10 +23,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A file in this test binary's own temporary folder (removed at exit).
 std::string TempPath(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lmd_nav2_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+  struct Folder {
+    fs::path dir = fs::temp_directory_path() / ("lmd_nav2_test_" + std::to_string(::getpid()));
+    Folder() { fs::create_directories(dir); }
+    ~Folder() { fs::remove_all(dir); }
+  };
+  static const Folder folder;
+  return (folder.dir / name).string();
 }
 
 // What nav2_map_server does with a map YAML: keys read, image relative to
