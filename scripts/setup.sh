@@ -9,6 +9,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   librocksdb-dev libspdlog-dev libfmt-dev libeigen3-dev zlib1g-dev libmicrohttpd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libzstd-dev liblz4-dev libbz2-dev libsqlite3-dev
 )
 
 missing=()

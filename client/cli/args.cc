@@ -1,6 +1,7 @@
 #include "client/cli/args.h"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 
 namespace lmd::cli {
@@ -28,6 +29,19 @@ Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::str
     }
   }
   return args;
+}
+
+Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
+  if (!args.Has(key)) return fallback;
+  char* end = nullptr;
+  const std::string text = args.Get(key);
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !(value >= lo && value <= hi)) {
+    char range[64];
+    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g", lo, hi);
+    return Status::InvalidArgument("--" + key + range + ", got '" + text + "'");
+  }
+  return value;
 }
 
 Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max) {

@@ -29,6 +29,10 @@ Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::str
 // The option as a whole number in [1, max], InvalidArgument naming it otherwise.
 Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max = 1000000);
 
+// The option as a number of metres in [lo, hi], InvalidArgument "--key must be
+// a number of metres from lo to hi, got '...'" otherwise.
+Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi);
+
 // InvalidArgument naming the first option that is not in `known` (a typo
 // such as --topk must not be ignored).
 Status CheckKnownOptions(const Args& args, const std::set<std::string>& known);

@@ -37,5 +37,7 @@ int IngestCommand(const CommandContext& ctx);
 int QueryCommand(const CommandContext& ctx);
 int ChangesCommand(const CommandContext& ctx);
 int RenderCommand(const CommandContext& ctx);
+int ImportMapCommand(const CommandContext& ctx);
+int ExportMapCommand(const CommandContext& ctx);
 
 }  // namespace lmd::cli

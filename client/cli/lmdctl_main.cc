@@ -18,13 +18,21 @@ constexpr char kUsage[] =
     "  list --collection C                                         list a collection's maps (alias: maps)\n"
     "  collections                                                 list collections\n"
     "  ingest --collection C --log FILE [--robot R]                local maps of a CARMEN log (5 m every 1 m), inserted\n"
+    "  ingest --collection C --bag PATH [BAG OPTIONS]              local maps of a bag (MCAP, rosbag2 dir or .db3, ROS 1 .bag)\n"
     "  query --collection C QUERY [--top-k N] [--method M]         stored maps showing the query's place\n"
     "  changes --collection C QUERY [--top-k N] [--method M]       hits with their ranked change masks\n"
+    "        (query / changes --mcap OUT.mcap: the answer for Foxglove, Lichtblick or ros2 bag play)\n"
     "  render --collection C QUERY --out FILE.svg                  picture of the top hit and its changes\n"
+    "  import-map --collection C --yaml MAP.yaml [--tile M]        a Nav2 map as anchored local maps (tiles of 12 m, half overlapping)\n"
+    "  export-map --collection C --out MAP.yaml [--id ID]          anchored maps (or one map) as a Nav2 map (YAML + PGM)\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
-    "QUERY is --file POINTS or --log FILE --map K; M is default, lmd-cor, lmd-cog or bow;\n"
+    "QUERY is --file POINTS, --log FILE --map K or --bag PATH --map K; M is default, lmd-cor, lmd-cog or bow;\n"
+    "BAG OPTIONS: --scan-topic T, --odom-topic T or --frame F (tf frame, e.g. map) choose the scans and poses (default:\n"
+    "the only LaserScan topic; tf map, else the only Odometry topic, else tf odom, else scan matching);\n"
+    "--scan-matching poses by scan matching; --allow-nan reads NaN ranges as no return; --salvage reads a cut-off file.\n"
+    "ingest --anchor stores each map with its first pose in the log's or bag's frame as pose hint (export-map draws them).\n"
     "--exclude ID[,ID...] leaves those stored maps out of query / changes / render hits;\n"
     "--verify N verifies the index's best N hits geometrically (default: the server's, 10; more when lost);\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
@@ -40,7 +48,8 @@ const std::map<std::string, Command>& Commands() {
       {"stats", StatsCommand},     {"backup", BackupCommand},
       {"demo", DemoCommand},       {"ingest", IngestCommand},
       {"query", QueryCommand},     {"changes", ChangesCommand},
-      {"render", RenderCommand},
+      {"render", RenderCommand},   {"import-map", ImportMapCommand},
+      {"export-map", ExportMapCommand},
   };
   return commands;
 }
@@ -73,7 +82,7 @@ std::string Required(const Args& args, const std::string& key) {
 }
 
 int Main(int argc, char** argv) {
-  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h"});
+  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor"});
   if (!args.ok()) return Fail(args.status().message(), 2);
   if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {
     std::fputs(kUsage, args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? stderr : stdout);
@@ -84,7 +93,8 @@ int Main(int argc, char** argv) {
   if (args->positional.size() > 1) return Fail("unexpected argument '" + args->positional[1] + "'", 2);
   const Status known = CheckKnownOptions(
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
-              "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir"});
+              "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
+              "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

@@ -34,3 +34,15 @@ std::string EvictedJsonLine(const v1::MapMetadata& metadata) {
 }
 
 }  // namespace lmd::cli
+
+namespace lmd::cli {
+
+std::string BagSummaryJsonLine(const std::string& bag, const BagLogSummary& summary, size_t maps) {
+  return "{\"bag\":" + JsonString(bag) + ",\"format\":" + JsonString(summary.format) +
+         ",\"scan_topic\":" + JsonString(summary.scan_topic) + ",\"scans_read\":" +
+         std::to_string(summary.scans_read) + ",\"scans_without_pose\":" + std::to_string(summary.scans_without_pose) +
+         ",\"pose_source\":" + JsonString(summary.pose_source) + ",\"laser_mounting\":" +
+         JsonString(summary.laser_mounting) + ",\"maps\":" + std::to_string(maps) + "}";
+}
+
+}  // namespace lmd::cli

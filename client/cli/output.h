@@ -6,6 +6,7 @@
 
 #include <google/protobuf/message.h>
 
+#include "core/io/bag_log.h"
 #include "lmd/v1/lmd.pb.h"
 
 namespace lmd::cli {
@@ -21,5 +22,10 @@ std::string MapJsonLine(const v1::MapMetadata& metadata);
 // A map lmdd deleted to keep its collection within its cap, as a JSON line
 // {"evicted": id, "collection": ...}, so that scripts tracking ids drop it.
 std::string EvictedJsonLine(const v1::MapMetadata& metadata);
+
+// What `ingest --bag` read, as the JSON line it ends with: {"bag": path,
+// "format", "scan_topic", "scans_read", "scans_without_pose", "pose_source",
+// "laser_mounting", "maps"}.
+std::string BagSummaryJsonLine(const std::string& bag, const BagLogSummary& summary, size_t maps);
 
 }  // namespace lmd::cli

@@ -6,8 +6,10 @@
 #include <fstream>
 
 #include "client/cli/commands.h"
+#include "client/cli/insert_maps.h"
 #include "client/cli/output.h"
 #include "client/cli/query_map.h"
+#include "client/cli/result_mcap.h"
 #include "core/render/result_svg.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -32,8 +34,9 @@ template <typename Request>
 int FillQuery(const CommandContext& ctx, Request* request) {
   request->set_collection(Required(ctx.args, "collection"));
   if (request->collection().empty()) return 2;
-  Result<LocalMap> map = QueryMapFromArgs(ctx.args);
-  if (!map.ok()) return Fail(map.status().message(), map.status().code() == Status::Code::kInvalidArgument ? 2 : 1);
+  bool usage_error = false;
+  Result<LocalMap> map = QueryMapFromArgs(ctx.args, &usage_error);
+  if (!map.ok()) return Fail(map.status().message(), usage_error ? 2 : 1);
   *request->mutable_map() = ToProto(*map);
   Result<long> top_k = GetPositive(ctx.args, "top-k", 10);
   if (!top_k.ok()) return Fail(top_k.status().message(), 2);
@@ -78,16 +81,6 @@ void PrintLocalization(const v1::Localization& l, bool json) {
               l.confidence(), l.best_score(), l.rival_score(), l.agreeing());
 }
 
-// "intel" for ".../intel.log.gz": the default robot of an ingested log.
-std::string LogName(const std::string& path) {
-  std::string name = path.substr(path.find_last_of('/') + 1);
-  for (const char* ext : {".gz", ".log"}) {
-    const size_t n = std::string(ext).size();
-    if (name.size() > n && name.compare(name.size() - n, n, ext) == 0) name.resize(name.size() - n);
-  }
-  return name;
-}
-
 constexpr const char* kReducedDepthNote =
     "(lmdd was busy and answered at its reduced depth: fewer maps verified; --verify N asks for a depth)";
 
@@ -95,36 +88,30 @@ constexpr const char* kReducedDepthNote =
 
 int IngestCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
-  if (collection.empty() || Required(ctx.args, "log").empty()) return 2;
-  Result<std::vector<LocalMap>> maps = LocalMapsFromLog(ctx.args);
-  if (!maps.ok()) return Fail(maps.status().message());
-  ProgressBar progress("ingest " + ctx.args.Get("log"), maps->size());
+  const bool bag = ctx.args.Has("bag");
+  if (collection.empty() || (bag ? Required(ctx.args, "bag") : Required(ctx.args, "log")).empty()) return 2;
+  BagLogSummary summary;
+  Result<std::vector<LocalMap>> maps = bag ? LocalMapsFromBag(ctx.args, &summary) : LocalMapsFromLog(ctx.args);
+  if (!maps.ok()) return Fail(maps.status().message() + " (no map stored)");
+  const std::string source = bag ? ctx.args.Get("bag") : ctx.args.Get("log");
   size_t evicted = 0;  // by the collection's cap (retain_maps_per_collection)
-  for (size_t i = 0; i < maps->size(); ++i) {
-    v1::InsertMapsRequest request;
-    v1::InsertMapRequest* insert = request.add_maps();
-    insert->mutable_metadata()->set_collection(collection);
-    insert->mutable_metadata()->set_map_id((*maps)[i].id);
-    // The log is one robot's route: its maps' order tells lmdd which overlap.
-    insert->mutable_metadata()->set_robot_id(ctx.args.Get("robot", LogName(ctx.args.Get("log"))));
-    insert->mutable_metadata()->set_sequence(i + 1);
-    *insert->mutable_map() = ToProto((*maps)[i]);
-    v1::InsertMapsResponse response;
-    const grpc::Status status = ctx.client.InsertMaps(request, &response);
-    if (!status.ok()) {
-      progress.Abandon();
-      return FailCall(status);
-    }
-    evicted += static_cast<size_t>(response.evicted_size());
-    if (ctx.json) {  // as soon as lmdd acknowledged it
-      std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"points\":%u}\n", response.maps(0).map_id().c_str(),
-                  collection.c_str(), response.maps(0).point_count());
-      for (const auto& meta : response.evicted()) std::printf("%s\n", EvictedJsonLine(meta).c_str());
-      std::fflush(stdout);
-    }
-    progress.Add();
+  std::vector<Pose2> anchors;  // --anchor: each map's first pose in the log's frame, as its pose hint
+  if (ctx.args.Switch("anchor")) {
+    for (const LocalMap& m : *maps) anchors.push_back(m.truth.global_frame);
   }
-  progress.Done();
+  // The log or bag is one robot's route: its maps' order tells lmdd which overlap.
+  if (int code = InsertLocalMaps(ctx, collection, *maps, anchors, "ingest " + source, LogName(source), &evicted)) {
+    return code;
+  }
+  if (bag) {
+    if (ctx.json) {
+      std::printf("%s\n", BagSummaryJsonLine(source, summary, maps->size()).c_str());
+    } else {
+      std::printf("%s: %s; scans %s (%zu read, %zu without a pose); poses: %s; laser: %s\n", source.c_str(),
+                  summary.format.c_str(), summary.scan_topic.c_str(), summary.scans_read,
+                  summary.scans_without_pose, summary.pose_source.c_str(), summary.laser_mounting.c_str());
+    }
+  }
   if (!ctx.json) std::printf("ingested %zu local maps into '%s'\n", maps->size(), collection.c_str());
   if (!ctx.json && evicted > 0) {
     std::printf("lmdd evicted the collection's %zu oldest maps to keep within its cap\n", evicted);
@@ -148,6 +135,10 @@ int QueryCommand(const CommandContext& ctx) {
   if (!ctx.json && response.hits_size() == 0) std::printf("no map of '%s' matches\n", request.collection().c_str());
   if (request.method() == v1::METHOD_DEFAULT) PrintLocalization(response.localization(), ctx.json);
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
+  if (ctx.args.Has("mcap")) {
+    return WriteResultMcap(ctx, request.collection(), request.map(), {response.hits().begin(), response.hits().end()},
+                           {});
+  }
   return 0;
 }
 
@@ -180,6 +171,15 @@ int ChangesCommand(const CommandContext& ctx) {
   }
   if (request.method() == v1::METHOD_DEFAULT) PrintLocalization(response.localization(), ctx.json);
   if (!ctx.json && response.reduced_depth()) std::printf("%s\n", kReducedDepthNote);
+  if (ctx.args.Has("mcap")) {
+    std::vector<v1::MapHit> hits;
+    std::vector<std::vector<v1::ChangeMask>> masks;
+    for (const auto& hit : response.hits()) {
+      hits.push_back(hit.hit());
+      masks.emplace_back(hit.masks().begin(), hit.masks().end());
+    }
+    return WriteResultMcap(ctx, request.collection(), request.map(), hits, masks);
+  }
   return 0;
 }
 

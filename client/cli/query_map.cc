@@ -9,11 +9,10 @@
 #include "proto/convert.h"
 
 namespace lmd::cli {
-namespace {
 
 std::string LogName(const std::string& path) {
   std::string name = path.substr(path.find_last_of('/') + 1);
-  for (const char* suffix : {".gz", ".log"}) {
+  for (const char* suffix : {".gz", ".log", ".mcap", ".bag", ".db3"}) {
     const std::string s = suffix;
     if (name.size() > s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0) {
       name.resize(name.size() - s.size());
@@ -22,18 +21,20 @@ std::string LogName(const std::string& path) {
   return name;
 }
 
-// Metres in [lo, hi] (a step of 1 nm made ingest build maps for ever).
-Result<double> Metres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
-  if (!args.Has(key)) return fallback;
-  char* end = nullptr;
-  const std::string text = args.Get(key);
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !(value >= lo && value <= hi)) {
-    char range[64];
-    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g", lo, hi);
-    return Status::InvalidArgument("--" + key + range + ", got '" + text + "'");
-  }
-  return value;
+namespace {
+
+// --length and --step; ids "<prefix>-<k>".
+Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args, const std::string& id_prefix) {
+  LocalMapOptions options;
+  // Bounded: a step of 1 nm made ingest build maps for ever.
+  Result<double> length = GetMetres(args, "length", options.length_m, 0.5, 100.0);
+  Result<double> step = GetMetres(args, "step", options.step_m, 0.1, 100.0);
+  if (!length.ok()) return length.status();
+  if (!step.ok()) return step.status();
+  options.length_m = *length;
+  options.step_m = *step;
+  options.id_prefix = id_prefix;
+  return options;
 }
 
 }  // namespace
@@ -42,36 +43,63 @@ Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args) {
   const std::string path = args.Get("log");
   Result<LaserLog> log = ReadCarmenLog(path);
   if (!log.ok()) return log.status();
-  LocalMapOptions options;
-  Result<double> length = Metres(args, "length", options.length_m, 0.5, 100.0);
-  Result<double> step = Metres(args, "step", options.step_m, 0.1, 100.0);
-  if (!length.ok()) return length.status();
-  if (!step.ok()) return step.status();
-  options.length_m = *length;
-  options.step_m = *step;
-  options.id_prefix = LogName(path);
-  std::vector<LocalMap> maps = BuildLocalMaps(*log, options);
+  Result<LocalMapOptions> options = LocalMapOptionsFromArgs(args, LogName(path));
+  if (!options.ok()) return options.status();
+  std::vector<LocalMap> maps = BuildLocalMaps(*log, *options);
   if (maps.empty()) return Status::InvalidArgument(path + ": the log is shorter than one local map");
   return maps;
 }
 
-Result<LocalMap> QueryMapFromArgs(const Args& args) {
-  if (args.Has("file") == args.Has("log")) {
-    return Status::InvalidArgument("give the query map as --file POINTS or as --log FILE --map K");
+Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* summary) {
+  std::string path = args.Get("bag");
+  while (path.size() > 1 && path.back() == '/') path.pop_back();  // a directory's name, not ""
+  BagLogOptions bag;
+  bag.scan_topic = args.Get("scan-topic");
+  bag.odom_topic = args.Get("odom-topic");
+  bag.frame = args.Get("frame");
+  bag.scan_matching = args.Switch("scan-matching");
+  bag.allow_nan_ranges = args.Switch("allow-nan");
+  bag.read.salvage_truncated = args.Switch("salvage");
+  Result<LocalMapOptions> options = LocalMapOptionsFromArgs(args, LogName(path));
+  if (!options.ok()) return options.status();
+  Result<LaserLog> log = ReadBagLaserLog(path, bag, summary);
+  if (!log.ok()) return log.status();
+  std::vector<LocalMap> maps = BuildLocalMaps(*log, *options);
+  if (maps.empty()) {
+    const std::vector<double> travel = CumulativeTravel(*log);
+    char what[160];
+    std::snprintf(what, sizeof what, ": %zu posed scans over %.1f m of travel, shorter than one local map (%g m)",
+                  log->scans.size(), travel.empty() ? 0.0 : travel.back(), options->length_m);
+    return Status::InvalidArgument(path + what);
+  }
+  return maps;
+}
+
+Result<LocalMap> QueryMapFromArgs(const Args& args, bool* usage_error) {
+  bool ignored = false;
+  bool& usage = usage_error ? *usage_error : ignored;
+  usage = true;
+  if (args.Has("file") + args.Has("log") + args.Has("bag") != 1) {
+    return Status::InvalidArgument("give the query map as --file POINTS or as --log FILE --map K (or --bag PATH --map K)");
   }
   if (args.Has("file")) {
+    usage = false;
     Result<v1::LocalMap> map = client::ReadPointsFile(args.Get("file"));
     if (!map.ok()) return map.status();
     return FromProto(*map);
   }
-  if (!args.Has("map")) return Status::InvalidArgument("--log needs --map K (0-based map number)");
+  const char* source = args.Has("bag") ? "--bag" : "--log";
+  if (!args.Has("map")) return Status::InvalidArgument(std::string(source) + " needs --map K (0-based map number)");
   char* end = nullptr;
   const long k = std::strtol(args.Get("map").c_str(), &end, 10);
   if (*end != '\0' || k < 0) return Status::InvalidArgument("--map must be a map number >= 0");
-  Result<std::vector<LocalMap>> maps = LocalMapsFromLog(args);
+  usage = false;
+  Result<std::vector<LocalMap>> maps = args.Has("bag") ? LocalMapsFromBag(args, nullptr) : LocalMapsFromLog(args);
   if (!maps.ok()) return maps.status();
   if (static_cast<size_t>(k) >= maps->size()) {
-    return Status::InvalidArgument("--map " + std::to_string(k) + " is out of range: the log gives " +
+    usage = true;
+    return Status::InvalidArgument("--map " + std::to_string(k) + " is out of range: the " +
+                                   std::string(args.Has("bag") ? "bag" : "log") + " gives " +
                                    std::to_string(maps->size()) + " local maps");
   }
   return std::move((*maps)[k]);

@@ -1,24 +1,37 @@
 // Where lmdctl's query commands take their local map from: a points file
 // (--file), or one local map built from a CARMEN log (--log FILE --map K, the
-// K-th map of 5 m every 1 m; --length / --step change those).
+// K-th map of 5 m every 1 m; --length / --step change those) or from a
+// recorded bag (--bag PATH --map K, with --scan-topic, --odom-topic, --frame,
+// --scan-matching, --allow-nan, --salvage as core/io/bag_log.h describes).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "client/cli/args.h"
+#include "core/io/bag_log.h"
 #include "core/status.h"
 #include "core/types.h"
 #include "lmd/v1/lmd.pb.h"
 
 namespace lmd::cli {
 
+// "intel" for ".../intel.log.gz" (also .mcap, .bag, .db3): map ids' prefix
+// and the robot an ingested log or bag is (one route).
+std::string LogName(const std::string& path);
+
 // The local maps of the log named by --log (with --length, --step), map ids
 // "<log file name without .log/.gz>-<k>". Errors name the file and line.
 Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args);
 
-// The query map named by --file or by --log and --map. InvalidArgument if
-// neither or both are given, or --map is out of range.
-Result<LocalMap> QueryMapFromArgs(const Args& args);
+// The local maps of the bag named by --bag (a file or a rosbag2 directory),
+// map ids "<bag name without extension>-<k>"; *summary (if not null) says
+// which topics and pose source were used. Errors name the bag and message.
+Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* summary);
+
+// The query map named by --file or by --log / --bag and --map. InvalidArgument if
+// none or several are given, or --map is out of range: then *usage_error (if
+// not null) is set true; it stays false when the file itself is at fault.
+Result<LocalMap> QueryMapFromArgs(const Args& args, bool* usage_error = nullptr);
 
 }  // namespace lmd::cli

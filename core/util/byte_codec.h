@@ -15,6 +15,10 @@ inline void PutU16(std::string& out, uint16_t v) {
   out.push_back(static_cast<char>(v >> 8));
 }
 
+inline void PutU32(std::string& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
 inline void PutU64(std::string& out, uint64_t v) {
   for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
 }
@@ -23,6 +27,12 @@ inline void PutF32(std::string& out, float f) {
   uint32_t v;
   std::memcpy(&v, &f, 4);
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+inline void PutF64(std::string& out, double d) {
+  uint64_t v;
+  std::memcpy(&v, &d, 8);
+  PutU64(out, v);
 }
 
 inline void PutVarint(std::string& out, uint64_t n) {

@@ -14,27 +14,6 @@
 namespace lmd::testing {
 namespace {
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-// Runs lmdctl with `args` (shell words), capturing stdout and stderr.
-CliRun RunLmdctl(const std::string& args, const TempDir& dir) {
-  const std::string err_path = dir.path() + "/stderr.txt";
-  const std::string command = std::string(LMDCTL_PATH) + " " + args + " 2>" + err_path;
-  CliRun run;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream err(err_path);
-  run.err.assign(std::istreambuf_iterator<char>(err), {});
-  return run;
-}
-
 int CountLines(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
 int CountOccurrences(const std::string& text, const std::string& what) {
   int n = 0;

@@ -1,6 +1,11 @@
 #include "tests/server/test_server.h"
 
+#include <sys/wait.h>
+
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <random>
 
 namespace lmd::testing {
@@ -64,5 +69,20 @@ v1::InsertMapsRequest OneMapRequest(const std::string& collection, const std::st
   *insert->mutable_map() = map;
   return request;
 }
+
+CliRun RunLmdctl(const std::string& args, const TempDir& dir) {
+  const std::string err_path = dir.path() + "/stderr.txt";
+  const std::string command = std::string(LMDCTL_PATH) + " " + args + " 2>" + err_path;
+  CliRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer;
+  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  run.err.assign(std::istreambuf_iterator<char>(err), {});
+  return run;
+}
+
 
 }  // namespace lmd::testing

@@ -40,6 +40,17 @@ class TestServer {
   std::unique_ptr<client::LmdClient> client_;
 };
 
+// What an lmdctl run printed and returned.
+struct CliRun {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// Runs lmdctl (LMDCTL_PATH) with `args` (shell words), capturing stdout and
+// stderr (through a file in `dir`).
+CliRun RunLmdctl(const std::string& args, const TempDir& dir);
+
 // A small valid local map: a square room outline, `n` points.
 v1::LocalMap SquareRoomMap(int n = 40);
 
