@@ -34,9 +34,16 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
     JudgedHit& h = (*hits)[i];
     h.agrees_with_best = false;
     if (h.map == nullptr || h.score < best.score - options.agreement_window) continue;
-    // The query's pose in A and in B give B's frame in A's: A <- query <- B.
-    const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));
-    h.agrees_with_best = Disagreement(*best.map, *h.map, b_in_a) <= options.max_disagreement;
+    if (best.collection_pose && h.collection_pose) {
+      const Pose2& a = *best.collection_pose;
+      const Pose2& b = *h.collection_pose;
+      h.agrees_with_best = std::hypot(a.x - b.x, a.y - b.y) <= options.same_place_m &&
+                           std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= options.same_place_deg * M_PI / 180;
+    } else {
+      // The query's pose in A and in B give B's frame in A's: A <- query <- B.
+      const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));
+      h.agrees_with_best = Disagreement(*best.map, *h.map, b_in_a) <= options.max_disagreement;
+    }
     if (h.agrees_with_best) {
       ++v.agreeing;
     } else {

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "core/align/prepared_map.h"
@@ -42,6 +43,7 @@ struct ConfidenceOptions {
   // Hits scoring less than best - agreement_window are not compared with the
   // best (they cannot be rivals within min_margin, nor place hits for changes).
   double agreement_window = 0.3;
+  double same_place_m = 1.0, same_place_deg = 5.0;  // anchored hits: one place
   // `confidence` = 1 / (1 + exp(-(bias + score_weight * best + margin_weight
   // * margin))), fitted (logistic regression) on the same queries' outcomes.
   double bias = -10.0, score_weight = 8.7, margin_weight = 16.9;
@@ -64,6 +66,10 @@ struct JudgedHit {
   double score = 0.0;
   Pose2 pose;                     // query own frame in the hit's own frame
   const PreparedMap* map = nullptr;
+  // The query's pose in the collection's frame, when the hit's map is
+  // anchored: two anchored hits agree when these agree (within
+  // same_place_m and same_place_deg), whatever their maps look like.
+  std::optional<Pose2> collection_pose;
   bool agrees_with_best = false;  // output
 };
 

@@ -87,11 +87,14 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     if (refined.score >= best.score) {
       refined.map_id = best.map_id, refined.votes = best.votes, refined.first_stage_rank = best.first_stage_rank;
       refined.db = best.db;
+      if (best.collection_pose) {  // the same anchor, the refined pose
+        refined.collection_pose = Compose(Compose(*best.collection_pose, Inverse(best.pose)), refined.pose);
+      }
       best = std::move(refined);
     }
   }
   std::vector<JudgedHit> judged;
-  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false});
+  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), h.collection_pose, false});
   out->verdict = Judge(&judged, options.confidence);
   // Only a sure verdict can be overturned by another pose of the best map.
   if (out->verdict.sure && second_pose) {
@@ -202,6 +205,7 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
                       bool with_changes) {
   Localization out;
   std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, stop, &out.stats);
+  SetCollectionPoses(source, &hits);
   std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
@@ -211,7 +215,7 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
     };
   }
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
-  SetCollectionPoses(source, &out.hits);
+  SetCollectionPoses(source, &out.hits);  // the refined best's
   return out;
 }
 

@@ -100,6 +100,7 @@ struct LocalizeOptions {
   // against the earlier maps; odometry drift allowed per metre travelled
   // (position, m/m; heading, rad/m) on top of the scan matching window.
   size_t sequence_hypotheses = 8;
+  size_t sequence_prior_maps = 2;  // anchored maps matched per map and hypothesis
   double sequence_drift = 0.03;
   double sequence_drift_rad_per_m = 0.02;
 };

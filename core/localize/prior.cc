@@ -99,6 +99,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   for (size_t i = 0; i < bounded.size() && i < options.prior_maps; ++i) candidates.push_back(bounded[i].second);
   match.window_deg = window_deg;
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stop, &out.stats);
+  SetCollectionPoses(source, &hits);
   out.verdict.prior_failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window.
   auto second_pose = [&](const LocalizedHit& best) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/localize/prior.h"
 #include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
 
@@ -10,39 +11,114 @@ namespace lmd {
 
 using namespace localize_internal;
 
+namespace {
+
+// A pose hypothesis for the newest map, and the evidence for it.
+struct Hypothesis {
+  Pose2 newest;             // the newest map's own frame: in the collection's frame, or in `db`'s
+  double single = 0.0;      // the verification score of the map that proposed it
+  LocalizedHit hit;         // the newest map's best hit at it (once scored)
+  double score = 0.0;       // the sequence's mean
+  size_t agreeing = 0;      // earlier maps that fit
+};
+
+bool Near(const Pose2& a, const Pose2& b, double metres, double radians) {
+  return std::hypot(a.x - b.x, a.y - b.y) <= metres && std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= radians;
+}
+
+}  // namespace
+
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
                               bool with_changes) {
   Localization out;
-  std::vector<LocalizedHit> hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
-  const size_t checked = std::min(hits.size(), options.sequence_hypotheses);
-  const double n = static_cast<double>(earlier.size() + 1);
-  for (size_t i = 0; i < checked; ++i) {
-    if (stop && stop()) break;
-    LocalizedHit& hit = hits[i];
-    double total = hit.score;
-    for (const SequenceStep& step : earlier) {
-      // Where the odometry puts the earlier map in this hypothesis's stored
-      // map, and how far off it may be after that much travel.
-      ScanMatchOptions match = options.match;
-      match.window_m += options.sequence_drift * step.travel_m;
-      match.window_deg += options.sequence_drift_rad_per_m * step.travel_m * 180 / M_PI;
-      const ScanMatch m = MatchLocalMaps(step.query.match, *hit.db, {Compose(hit.pose, step.in_newest)}, match);
-      ++out.stats.maps_matched;
-      const double score = Scored(step.query, *hit.db, m, options).score;
-      total += score;
-      hit.sequence_agreeing += score >= options.confidence.min_score;
+  // Every map of the sequence proposes poses for the newest: its own hits,
+  // carried to the newest through the odometry. A look-alike that fools the
+  // newest map rarely fools the maps before it too.
+  std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
+  SetCollectionPoses(source, &newest_hits);
+  const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),
+                                    [](const LocalizedHit& h) { return h.collection_pose.has_value(); });
+  std::vector<Hypothesis> hypotheses;
+  auto propose = [&](const Pose2& pose, double single) {
+    for (Hypothesis& h : hypotheses) {
+      if (Near(h.newest, pose, options.match.window_m, options.match.window_deg * M_PI / 180)) {
+        h.single = std::max(h.single, single);
+        return;
+      }
     }
-    hit.score = total / n;  // the whole sequence's mean
+    hypotheses.push_back({pose, single, {}, 0.0, 0});
+  };
+  for (const LocalizedHit& h : newest_hits) {
+    if (h.collection_pose) propose(*h.collection_pose, h.score);
   }
-  // Hypotheses the sequence did not check keep only the newest map's score:
-  // ranked after those it did.
-  for (size_t i = checked; i < hits.size(); ++i) hits[i].score = std::min(hits[i].score, 0.0);
-  std::stable_sort(hits.begin(), hits.end(), [](const LocalizedHit& a, const LocalizedHit& b) {
-    if (a.score != b.score) return a.score > b.score;
-    return a.map_id < b.map_id;
-  });
+  if (anchored) {
+    for (const SequenceStep& step : earlier) {
+      if (stop && stop()) break;
+      std::vector<LocalizedHit> hits = SearchAndVerify(step.query, source, options, excluded, stop, &out.stats);
+      SetCollectionPoses(source, &hits);
+      for (const LocalizedHit& h : hits) {
+        if (h.collection_pose) propose(Compose(*h.collection_pose, Inverse(step.in_newest)), h.score);
+      }
+    }
+  }
+  if (!anchored) {
+    // Without a site map, the newest map's hits are judged alone.
+    Conclude(newest, options, std::move(newest_hits), nullptr, with_changes, &out);
+    out.verdict.sequence_maps = earlier.size();
+    return out;
+  }
+  std::stable_sort(hypotheses.begin(), hypotheses.end(),
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.single > b.single; });
+  if (hypotheses.size() > options.sequence_hypotheses) hypotheses.resize(options.sequence_hypotheses);
+
+  // Each hypothesis: every map of the sequence localised where it puts it
+  // (the window grown by the odometry's drift over its travel: a heading
+  // error turns the map about its own origin, which moves its centroid, the
+  // search's pivot, too). Its score is the sequence's mean.
+  LocalizeOptions near_options = options;
+  near_options.self_rival_radius_m = 0;  // a map's fit is asked here, not whether it is sure
+  near_options.prior_maps = options.sequence_prior_maps;
+  for (Hypothesis& h : hypotheses) {
+    if (stop && stop()) break;
+    Prior at;
+    at.pose = h.newest;
+    at.radius_m = options.match.window_m;
+    at.heading_sigma_rad = options.match.window_deg * M_PI / 180;
+    const Localization here = LocalizeNear(newest, source, near_options, at, excluded, stop);
+    out.stats.maps_matched += here.stats.maps_matched;
+    if (here.hits.empty()) continue;
+    h.hit = here.hits[0];
+    double total = h.hit.score;
+    for (const SequenceStep& step : earlier) {
+      const double heading_error = options.sequence_drift_rad_per_m * step.travel_m;
+      Prior prior;
+      prior.pose = Compose(h.newest, step.in_newest);
+      prior.radius_m = options.match.window_m + options.sequence_drift * step.travel_m +
+                       std::hypot(step.query.match.centroid.x, step.query.match.centroid.y) * heading_error;
+      prior.heading_sigma_rad = heading_error + options.match.window_deg * M_PI / 180;
+      const Localization l = LocalizeNear(step.query, source, near_options, prior, excluded, stop);
+      out.stats.maps_matched += l.stats.maps_matched;
+      const double score = l.hits.empty() ? 0.0 : l.hits[0].score;
+      total += score;
+      h.agreeing += score >= options.confidence.min_score;
+    }
+    h.score = total / static_cast<double>(earlier.size() + 1);
+  }
+  // The hits: the newest map's best hit at each hypothesis, by the
+  // sequence's score; the verdict over them (two hypotheses at one place
+  // agree, at two places one is the other's rival).
+  std::stable_sort(hypotheses.begin(), hypotheses.end(),
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+  std::vector<LocalizedHit> hits;
+  for (const Hypothesis& h : hypotheses) {
+    if (!h.hit.db) continue;
+    LocalizedHit hit = h.hit;
+    hit.score = h.score;
+    hit.sequence_agreeing = h.agreeing;
+    hits.push_back(std::move(hit));
+  }
   LocalizeOptions judged = options;
   judged.refine_best = false;  // a refinement would score the newest map alone
   Conclude(newest, judged, std::move(hits), nullptr, with_changes, &out);

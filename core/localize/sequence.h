@@ -18,12 +18,16 @@ struct SequenceStep {
   double travel_m = 0.0;  // distance the robot travelled from it to the newest (drift grows with it)
 };
 
-// Localises `newest` as Localize does, then scores each of the best
-// `sequence_hypotheses` hits by the mean verification score over the whole
-// sequence (the newest map's, and each earlier map's, matched against the
-// same stored map near its predicted pose) and ranks and judges them by it.
-// A hit's sequence_agreeing counts the earlier maps that fit it
-// (score >= confidence.min_score); the verdict says it for the best.
+// In an anchored collection: every map of the sequence is localised (first
+// stage and verification) and proposes poses for the newest through the
+// odometry; for the `sequence_hypotheses` best, each map of the sequence is
+// localised where the pose puts it (LocalizeNear; the window grown by the
+// drift over its travel) and the hypothesis scores the sequence's mean. A
+// look-alike that fools the newest map rarely fools the maps before it. The
+// hits are the newest map's at each hypothesis, ranked and judged by that
+// score; sequence_agreeing counts the earlier maps that fit (score >=
+// confidence.min_score). Without anchored maps the newest map is judged
+// alone (verdict.sequence_agreeing 0).
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded = {},
