@@ -66,11 +66,11 @@ struct JudgedHit {
   double score = 0.0;
   Pose2 pose;                     // query own frame in the hit's own frame
   const PreparedMap* map = nullptr;
+  bool agrees_with_best = false;  // output
   // The query's pose in the collection's frame, when the hit's map is
   // anchored: two anchored hits agree when these agree (within
   // same_place_m and same_place_deg), whatever their maps look like.
   std::optional<Pose2> collection_pose;
-  bool agrees_with_best = false;  // output
 };
 
 // Judges `hits` (best first); sets each hit's agrees_with_best (the best

@@ -94,7 +94,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     }
   }
   std::vector<JudgedHit> judged;
-  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), h.collection_pose, false});
+  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
   out->verdict = Judge(&judged, options.confidence);
   // Only a sure verdict can be overturned by another pose of the best map.
   if (out->verdict.sure && second_pose) {
