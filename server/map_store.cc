@@ -628,11 +628,11 @@ Result<IndexedEntry> MapStore::Indexed(const std::string& collection, uint64_t i
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
   const auto it = state->map_ids.find(index_id);
-  const PlaceFeatures* features = state->places.Features(index_id);
-  if (it == state->map_ids.end() || features == nullptr) {
+  const std::optional<double> heading = state->places.Heading(index_id);
+  if (it == state->map_ids.end() || !heading) {
     return Status::NotFound("map " + std::to_string(index_id) + " of collection '" + collection + "' is gone");
   }
-  return IndexedEntry{it->second, features->heading};
+  return IndexedEntry{it->second, *heading};
 }
 
 bool MapStore::RouteOf(const std::string& collection, uint64_t index_id, MapSource::Route* route) const {

@@ -324,10 +324,7 @@ class SimulatedStore : public MapSource {
       }
     }
     const double c0 = ThreadCpuMs();
-    const PlaceFeatures* features = index_.Features(map_id);
-    auto prepared = std::make_shared<const PreparedMap>(
-        PrepareMap(maps_[map_id].Expand(), prepare_,
-                   features ? std::optional<double>(features->heading) : std::nullopt));
+    auto prepared = std::make_shared<const PreparedMap>(PrepareMap(maps_[map_id].Expand(), prepare_, index_.Heading(map_id)));
     tally.cpu_ms += ThreadCpuMs() - c0;
     ++tally.count;
     preparations_.fetch_add(1);

@@ -29,6 +29,9 @@ const std::array<std::array<uint8_t, PlaceIndex::kKeyBits>, PlaceIndex::kTables>
   return bits;
 }
 
+// Stored codes fetched this many candidates ahead of their comparison.
+constexpr size_t kPrefetch = 8;
+
 // Open-addressing accumulator of votes per (slot, turn, cell x, cell y).
 class VoteTable {
  public:
@@ -112,13 +115,31 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
     slot = static_cast<uint32_t>(slot_id_.size());
     slot_id_.push_back(0);
     slot_hash_.push_back(0);
-    slot_features_.emplace_back();
+    slot_heading_.push_back(0.0);
+    slot_count_.push_back(0);
+    slot_chunks_.emplace_back();
+  }
+  std::vector<uint32_t>& chunks = slot_chunks_[slot];
+  chunks.clear();
+  while (chunks.size() * kChunk < features.features.size()) {
+    uint32_t chunk;
+    if (!free_chunks_.empty()) {
+      chunk = free_chunks_.back();
+      free_chunks_.pop_back();
+    } else {
+      chunk = static_cast<uint32_t>(chunk_slot_.size());
+      chunk_slot_.push_back(kNoSlot);
+      codes_.resize(codes_.size() + kChunk);
+      xs_.resize(xs_.size() + kChunk), ys_.resize(ys_.size() + kChunk);
+    }
+    chunk_slot_[chunk] = slot;
+    chunks.push_back(chunk);
   }
   for (size_t i = 0; i < features.features.size(); ++i) {
-    for (int t = 0; t < kTables; ++t) {
-      buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(features.features[i].code, t)].push_back(
-          Handle(slot, static_cast<uint32_t>(i)));
-    }
+    const PlaceFeature& f = features.features[i];
+    const uint32_t handle = HandleOf(slot, i);
+    codes_[handle] = f.code, xs_[handle] = f.x, ys_[handle] = f.y;
+    for (int t = 0; t < kTables; ++t) buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(f.code, t)].push_back(handle);
   }
   feature_count_ += features.features.size();
   uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a over the codes and positions
@@ -129,7 +150,8 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
   }
   slot_hash_[slot] = hash;
   slot_id_[slot] = id;
-  slot_features_[slot] = std::move(features);
+  slot_heading_[slot] = features.heading;
+  slot_count_[slot] = static_cast<uint32_t>(features.features.size());
   id_to_slot_[id] = slot;
   return Status::Ok();
 }
@@ -138,11 +160,10 @@ bool PlaceIndex::Remove(uint64_t id) {
   const auto it = id_to_slot_.find(id);
   if (it == id_to_slot_.end()) return false;
   const uint32_t slot = it->second;
-  PlaceFeatures& features = slot_features_[slot];
-  for (size_t i = 0; i < features.features.size(); ++i) {
-    const uint32_t handle = Handle(slot, static_cast<uint32_t>(i));
+  for (size_t i = 0; i < slot_count_[slot]; ++i) {
+    const uint32_t handle = HandleOf(slot, i);
     for (int t = 0; t < kTables; ++t) {
-      std::vector<uint32_t>& bucket = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(features.features[i].code, t)];
+      std::vector<uint32_t>& bucket = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(codes_[handle], t)];
       const auto at = std::find(bucket.begin(), bucket.end(), handle);
       if (at != bucket.end()) {
         *at = bucket.back();
@@ -150,23 +171,42 @@ bool PlaceIndex::Remove(uint64_t id) {
       }
     }
   }
-  feature_count_ -= features.features.size();
-  features = PlaceFeatures();
+  feature_count_ -= slot_count_[slot];
+  slot_count_[slot] = 0;
+  for (uint32_t chunk : slot_chunks_[slot]) chunk_slot_[chunk] = kNoSlot, free_chunks_.push_back(chunk);
+  slot_chunks_[slot].clear();
   free_slots_.push_back(slot);
   id_to_slot_.erase(it);
   return true;
 }
 
-const PlaceFeatures* PlaceIndex::Features(uint64_t id) const {
+std::optional<PlaceFeatures> PlaceIndex::Features(uint64_t id) const {
   const auto it = id_to_slot_.find(id);
-  return it == id_to_slot_.end() ? nullptr : &slot_features_[it->second];
+  if (it == id_to_slot_.end()) return std::nullopt;
+  const uint32_t slot = it->second;
+  PlaceFeatures out;
+  out.heading = slot_heading_[slot];
+  for (size_t i = 0; i < slot_count_[slot]; ++i) {
+    const uint32_t handle = HandleOf(slot, i);
+    out.features.push_back({xs_[handle], ys_[handle], codes_[handle]});
+  }
+  return out;
+}
+
+std::optional<double> PlaceIndex::Heading(uint64_t id) const {
+  const auto it = id_to_slot_.find(id);
+  if (it == id_to_slot_.end()) return std::nullopt;
+  return slot_heading_[it->second];
 }
 
 size_t PlaceIndex::MemoryBytes() const {
   size_t bytes = buckets_.size() * sizeof(std::vector<uint32_t>);
   for (const auto& b : buckets_) bytes += b.capacity() * sizeof(uint32_t);
-  for (const PlaceFeatures& f : slot_features_) bytes += sizeof(PlaceFeatures) + f.features.capacity() * sizeof(PlaceFeature);
+  bytes += slot_heading_.capacity() * 8 + slot_count_.capacity() * 4;
+  for (const auto& chunks : slot_chunks_) bytes += sizeof(chunks) + chunks.capacity() * 4;
   bytes += id_to_slot_.size() * 32 + slot_id_.capacity() * 8;
+  bytes += codes_.capacity() * sizeof(PlaceCode) + (xs_.capacity() + ys_.capacity()) * sizeof(float) +
+           chunk_slot_.capacity() * 4;
   return bytes;
 }
 
@@ -175,6 +215,12 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
                                                 PlaceSearchStats* stats) const {
   PlaceSearchStats work;
   const size_t k_nearest = std::max<size_t>(1, options.neighbours);
+  // Overfull buckets: beyond an absolute size, or many times the mean (the
+  // mean grows with the collection; an absolute cap alone would end up
+  // skipping every bucket of a large one).
+  const double mean_bucket = static_cast<double>(feature_count_) / static_cast<double>(size_t{1} << kKeyBits);
+  const size_t max_bucket = options.max_bucket == 0 ? 0
+                                : std::max(options.max_bucket, static_cast<size_t>(options.max_bucket_share * mean_bucket));
   const double cell = options.vote_cell_m > 0 ? options.vote_cell_m : 1.0;
   VoteTable votes(query.features.size() * 4 * k_nearest);
   // Ties of distance are broken by the stored feature's code, then by its
@@ -205,13 +251,16 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
       for (int t = 0; t < kTables; ++t) {
         const std::vector<uint32_t>& bucket = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(code, t)];
         ++work.lookups;
-        if (options.max_bucket > 0 && bucket.size() > options.max_bucket) continue;
+        if (max_bucket > 0 && bucket.size() > max_bucket) continue;
         work.candidates += bucket.size();
-        for (const uint32_t handle : bucket) {
-          const PlaceCode& stored = slot_features_[handle >> 10].features[handle & 1023].code;
+        const size_t count = bucket.size();
+        for (size_t b = 0; b < count; ++b) {
+          if (b + kPrefetch < count) __builtin_prefetch(&codes_[bucket[b + kPrefetch]]);
+          const uint32_t handle = bucket[b];
+          const PlaceCode& stored = codes_[handle];
           const int d = HammingDistance(code, stored);
           if (d > worst) continue;
-          const Near near{d, stored[0], slot_hash_[handle >> 10] ^ (handle & 1023), handle};
+          const Near near{d, stored[0], slot_hash_[chunk_slot_[handle / kChunk]] ^ handle % kChunk, handle};
           if (nearest.size() == k_nearest && !(near < nearest.back())) continue;
           bool seen = false;  // the same feature from another table
           for (const Near& n : nearest) seen = seen || n.handle == handle;
@@ -235,9 +284,8 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
                           ? static_cast<float>(std::exp(-(p.distance - closest) / options.vote_temperature) / total)
                           : 1.0f;
       const Point2 turned = TurnQuarters({qf.x, qf.y}, p.turn);
-      const uint32_t slot = p.handle >> 10;
-      const PlaceFeature& df = slot_features_[slot].features[p.handle & 1023];
-      const double tx = df.x - turned.x, ty = df.y - turned.y;
+      const uint32_t slot = chunk_slot_[p.handle / kChunk];
+      const double tx = xs_[p.handle] - turned.x, ty = ys_[p.handle] - turned.y;
       const double cx = std::floor(tx / cell), cy = std::floor(ty / cell);
       if (std::abs(cx) >= VoteTable::kCellLimit - 1 || std::abs(cy) >= VoteTable::kCellLimit - 1) continue;
       votes.Add(VoteTable::KeyOf(slot, p.turn, static_cast<int32_t>(cx), static_cast<int32_t>(cy)), w,
@@ -300,7 +348,7 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
       continue;
     }
     mine.push_back(&b);
-    out.push_back({id, slot_features_[b.slot].heading, b.turn, {b.sum_x / b.weight, b.sum_y / b.weight}, b.weight});
+    out.push_back({id, slot_heading_[b.slot], b.turn, {b.sum_x / b.weight, b.sum_y / b.weight}, b.weight});
   }
   if (stats != nullptr) *stats = work;
   return out;

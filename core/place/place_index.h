@@ -27,6 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -41,8 +42,10 @@ struct PlaceSearchOptions {
   size_t neighbours = 10;
   // Codes farther than this (of 128 bits) do not vote.
   int max_hamming = 40;
-  // Buckets with more features than this are not read (0 = read all).
+  // Buckets with more features than the larger of max_bucket and
+  // max_bucket_share times the mean bucket are not read (0 = read all).
   size_t max_bucket = 2000;
+  double max_bucket_share = 16.0;
   double vote_cell_m = 1.0;  // m, translation cell
   // Each query feature casts one vote in all, shared among its kept pairs
   // (all 4 turns) in proportion to exp(-(distance - nearest) / temperature),
@@ -100,21 +103,38 @@ class PlaceIndex {
                                       const std::function<bool(uint64_t)>& excluded = {},
                                       PlaceSearchStats* stats = nullptr) const;
 
-  // The stored features of `id`, or null.
-  const PlaceFeatures* Features(uint64_t id) const;
+  // The stored features of `id` (a copy), or nothing.
+  std::optional<PlaceFeatures> Features(uint64_t id) const;
+  // The compass heading of `id`'s features, or nothing.
+  std::optional<double> Heading(uint64_t id) const;
   size_t size() const { return id_to_slot_.size(); }
   size_t FeatureCount() const { return feature_count_; }
   size_t MemoryBytes() const;
 
  private:
   static uint32_t Key(const PlaceCode& code, int table);
-  static uint32_t Handle(uint32_t slot, uint32_t feature) { return slot << 10 | feature; }
+  // Handle of a map's k-th feature: its place in the arena below.
+  uint32_t HandleOf(uint32_t slot, size_t k) const {
+    return slot_chunks_[slot][k / kChunk] * kChunk + static_cast<uint32_t>(k % kChunk);
+  }
 
   std::vector<std::vector<uint32_t>> buckets_;  // kTables * 2^kKeyBits lists of handles
+  // Every stored feature's code and position, in chunks of kChunk (a map's
+  // features fill chunks of its own), so that a search reads a candidate's
+  // code with one memory access, not two dependent ones: at 100k maps that
+  // access is most of a search (docs/places_bench.md).
+  static constexpr uint32_t kChunk = 64;
+  static constexpr uint32_t kNoSlot = ~0u;
+  std::vector<PlaceCode> codes_;       // by handle
+  std::vector<float> xs_, ys_;         // by handle, compass frame
+  std::vector<uint32_t> chunk_slot_;   // the slot owning each chunk, or kNoSlot
+  std::vector<uint32_t> free_chunks_;
+  std::vector<std::vector<uint32_t>> slot_chunks_;
   std::unordered_map<uint64_t, uint32_t> id_to_slot_;
   std::vector<uint64_t> slot_id_;
   std::vector<uint64_t> slot_hash_;  // of each map's features: orders equal votes by content, not insertion
-  std::vector<PlaceFeatures> slot_features_;
+  std::vector<double> slot_heading_;
+  std::vector<uint32_t> slot_count_;  // features per slot
   std::vector<uint32_t> free_slots_;
   size_t feature_count_ = 0;
 };

@@ -140,7 +140,7 @@ TEST(PlaceIndexTest, HypothesesAreRankedByVotesAndBoundedPerMap) {
       EXPECT_GE(h.quarter_turns, 0);
       EXPECT_LT(h.quarter_turns, 4);
       EXPECT_GT(h.votes, 0.0);
-      ASSERT_NE(index.Features(h.map_id), nullptr);
+      ASSERT_TRUE(index.Features(h.map_id).has_value());
       EXPECT_EQ(h.db_heading, index.Features(h.map_id)->heading);
       EXPECT_LE(++per_map[h.map_id], 2) << h.map_id;
       if (r > 0) {
@@ -173,7 +173,7 @@ TEST(PlaceIndexTest, AddOfAnExistingIdFailsAndChangesNothing) {
   EXPECT_EQ(again.code(), Status::Code::kAlreadyExists);
   EXPECT_EQ(index.size(), maps);
   EXPECT_EQ(index.FeatureCount(), features);
-  ASSERT_NE(index.Features(70), nullptr);
+  ASSERT_TRUE(index.Features(70).has_value());
   EXPECT_EQ(index.Features(70)->features.size(), DemoFeatures(70).features.size());
   EXPECT_EQ(index.Features(70)->heading, DemoFeatures(70).heading);
   const std::vector<PlaceHypothesis> after = SearchDefault(index, query);
@@ -194,7 +194,7 @@ TEST(PlaceIndexTest, MoreThanTheMaximumFeaturesIsInvalidArgument) {
   EXPECT_EQ(index.Add(1, many).code(), Status::Code::kInvalidArgument);
   EXPECT_EQ(index.size(), 0u);
   EXPECT_EQ(index.FeatureCount(), 0u);
-  EXPECT_EQ(index.Features(1), nullptr);
+  EXPECT_FALSE(index.Features(1).has_value());
   EXPECT_TRUE(SearchDefault(index, many).empty());
   many.features.pop_back();  // exactly the maximum is accepted
   EXPECT_TRUE(index.Add(1, many).ok());
@@ -205,8 +205,9 @@ TEST(PlaceIndexTest, FeaturesReturnsTheStoredFeaturesOrNull) {
   PlaceIndex index;
   const PlaceFeatures& stored = DemoFeatures(14);
   ASSERT_TRUE(index.Add(99, stored).ok());
-  const PlaceFeatures* got = index.Features(99);
-  ASSERT_NE(got, nullptr);
+  const std::optional<PlaceFeatures> got = index.Features(99);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(index.Heading(99), stored.heading);
   EXPECT_EQ(got->heading, stored.heading);
   ASSERT_EQ(got->features.size(), stored.features.size());
   for (size_t i = 0; i < stored.features.size(); ++i) {
@@ -214,7 +215,8 @@ TEST(PlaceIndexTest, FeaturesReturnsTheStoredFeaturesOrNull) {
     EXPECT_EQ(got->features[i].y, stored.features[i].y);
     EXPECT_EQ(got->features[i].code, stored.features[i].code);
   }
-  EXPECT_EQ(index.Features(14), nullptr);
+  EXPECT_FALSE(index.Features(14).has_value());
+  EXPECT_FALSE(index.Heading(14).has_value());
   EXPECT_EQ(index.size(), 1u);
   EXPECT_EQ(index.FeatureCount(), stored.features.size());
   EXPECT_GT(index.MemoryBytes(), stored.features.size() * sizeof(PlaceFeature));
@@ -229,7 +231,7 @@ TEST(PlaceIndexTest, RemovedMapIsNeverReturned) {
   EXPECT_TRUE(index.Remove(140));
   EXPECT_EQ(index.size(), maps - 1);
   EXPECT_EQ(index.FeatureCount(), features - DemoFeatures(140).features.size());
-  EXPECT_EQ(index.Features(140), nullptr);
+  EXPECT_FALSE(index.Features(140).has_value());
   PlaceSearchOptions wide;
   wide.max_hypotheses = 1000;
   const std::vector<PlaceHypothesis> without = index.Search(query, wide);
@@ -395,7 +397,7 @@ TEST(PlaceIndexTest, AnEmptyIndexReturnsNothing) {
   EXPECT_EQ(index.size(), 0u);
   EXPECT_EQ(index.FeatureCount(), 0u);
   EXPECT_TRUE(SearchDefault(index, DemoFeatures(0)).empty());
-  EXPECT_EQ(index.Features(0), nullptr);
+  EXPECT_FALSE(index.Features(0).has_value());
 }
 
 }  // namespace
