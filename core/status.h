@@ -13,7 +13,7 @@ class Status {
  public:
   enum class Code {
     kOk, kInvalidArgument, kNotFound, kAlreadyExists, kCorruption, kIoError, kResourceExhausted, kInternal,
-    kUnauthenticated, kPermissionDenied, kCancelled, kDeadlineExceeded,
+    kUnauthenticated, kPermissionDenied, kCancelled, kDeadlineExceeded, kFailedPrecondition,
   };
 
   Status() = default;
@@ -29,6 +29,7 @@ class Status {
   static Status PermissionDenied(std::string msg) { return Status(Code::kPermissionDenied, std::move(msg)); }
   static Status Cancelled(std::string msg) { return Status(Code::kCancelled, std::move(msg)); }
   static Status DeadlineExceeded(std::string msg) { return Status(Code::kDeadlineExceeded, std::move(msg)); }
+  static Status FailedPrecondition(std::string msg) { return Status(Code::kFailedPrecondition, std::move(msg)); }
 
   bool ok() const { return code_ == Code::kOk; }
   Code code() const { return code_; }

@@ -80,6 +80,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_top_k") return SetUnsigned(key, value, &config->max_top_k, 1);
   if (key == "max_verify_candidates") return SetUnsigned(key, value, &config->max_verify_candidates);
   if (key == "max_collections") return SetUnsigned(key, value, &config->max_collections, 1);
+  if (key == "max_sequence_maps") return SetUnsigned(key, value, &config->max_sequence_maps, 1);
   if (key == "max_abs_coordinate_m") {
     return SetNumber(key, value, [](double m) { return m > 0 && m <= 1e9; }, "a positive number of metres",
                      &config->max_abs_coordinate_m);

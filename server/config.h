@@ -35,6 +35,8 @@ struct ServerConfig {
   uint32_t max_verify_candidates = 100;
   // Number of collections.
   uint32_t max_collections = 1000;
+  // Earlier maps in one sequence query (each costs a localisation).
+  uint32_t max_sequence_maps = 8;
   // Maps a collection keeps: an insert beyond it deletes the collection's
   // oldest maps (insertion order) in the same write and lists them in the
   // response (evicted). 0: keep every map. A fleet that stores a map per

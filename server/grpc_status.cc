@@ -13,6 +13,7 @@ grpc::Status ToGrpcStatus(const Status& status) {
     case Status::Code::kPermissionDenied: return {grpc::StatusCode::PERMISSION_DENIED, status.message()};
     case Status::Code::kCancelled: return {grpc::StatusCode::CANCELLED, status.message()};
     case Status::Code::kDeadlineExceeded: return {grpc::StatusCode::DEADLINE_EXCEEDED, status.message()};
+    case Status::Code::kFailedPrecondition: return {grpc::StatusCode::FAILED_PRECONDITION, status.message()};
     case Status::Code::kCorruption:
     case Status::Code::kIoError:
     case Status::Code::kInternal: return {grpc::StatusCode::INTERNAL, status.ToString()};

@@ -28,6 +28,7 @@ Status DistinctIds(const v1::InsertMapsRequest& request) {
 }
 
 constexpr uint32_t kDefaultPageSize = 1000;
+constexpr size_t kRecentFixes = 4096;  // sure localisations remembered to anchor the maps inserted next
 
 // Validates the lookup key of a get / delete.
 Status ValidateKey(const std::string& collection, const std::string& map_id) {
@@ -54,10 +55,13 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       runner_(runner),
       metrics_(metrics),
       cache_(config.descriptor_cache_entries),
-      prepared_(size_t{config.prepared_map_cache_mb} << 20) {}
+      prepared_(size_t{config.prepared_map_cache_mb} << 20),
+      fixes_(kRecentFixes) {}
 
-std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap& map) const {
+std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap& map,
+                                                             DescriptorCache::Key* key_out) const {
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
+  if (key_out != nullptr) *key_out = key;
   if (std::shared_ptr<const DescribedMap> cached = cache_.Find(key)) return cached;
   auto described = std::make_shared<const DescribedMap>(DescribeMap(FromProto(map), store_->indexing()));
   cache_.Put(key, described);
@@ -81,7 +85,17 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     MapWrite write;
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
-    described.push_back(Describe(request->map()));
+    DescriptorCache::Key key;
+    described.push_back(Describe(request->map(), &key));
+    // The anchor (output only): the robot's pose hint, or where lmdd has
+    // just localised this very map against the collection's anchored maps.
+    v1::MapMetadata* meta = write.map.mutable_metadata();
+    meta->clear_anchor();
+    if (meta->has_pose_hint()) {
+      *meta->mutable_anchor()->mutable_pose() = meta->pose_hint();
+    } else if (std::optional<v1::MapAnchor> fix = fixes_.Find(meta->collection(), key)) {
+      *meta->mutable_anchor() = *fix;
+    }
     write.lmd = described.back()->lmd;
     write.place = described.back()->place.features;
     maps.push_back(std::move(write));

@@ -15,6 +15,7 @@
 #include "server/descriptor_cache.h"
 #include "server/map_store.h"
 #include "server/prepared_maps.h"
+#include "server/recent_fixes.h"
 
 namespace lmd::server {
 
@@ -54,8 +55,9 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
 
  private:
   // What lmdd computes from `map` (the paper's descriptor, the default
-  // method's preparation), from the cache when the same map was seen recently.
-  std::shared_ptr<const DescribedMap> Describe(const v1::LocalMap& map) const;
+  // method's preparation), from the cache when the same map was seen
+  // recently; `key` (if not null) receives its content key.
+  std::shared_ptr<const DescribedMap> Describe(const v1::LocalMap& map, DescriptorCache::Key* key = nullptr) const;
 
   // A query: validated, described, and answered against its collection.
   struct Query {
@@ -67,13 +69,26 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
     std::vector<StoreHit> paper_hits;  // paper methods: the LMD index's ranking
     bool reduced_depth = false;        // answered at the busy depth (config.h busy_*)
   };
-  // Maps whose id is in `exclude` are left out of the hits; `verify_candidates`
-  // is the request's (0: the server's, reduced while the server is busy);
-  // `with_changes`: the default method's change masks too. Cancelled once
+  // What Retrieve and DetectChanges ask alike.
+  struct QueryRequest {
+    const std::string* collection;
+    const v1::LocalMap* map;
+    uint32_t top_k = 0;
+    v1::Method method = v1::METHOD_DEFAULT;
+    const google::protobuf::RepeatedPtrField<std::string>* exclude;
+    uint32_t verify_candidates = 0;  // 0: the server's, reduced while the server is busy
+    const v1::Prior* prior = nullptr;  // null: none
+    const google::protobuf::RepeatedPtrField<v1::SequenceMap>* sequence;
+    bool with_changes = false;  // the default method's change masks too
+  };
+  template <typename Request>
+  static QueryRequest QueryOf(const Request& request, bool with_changes);
+  // Maps whose id is in `exclude` are left out of the hits. Cancelled once
   // `context` is (checked between scan matches).
-  Result<Query> RunQuery(const std::string& collection, const v1::LocalMap& map, uint32_t top_k,
-                         v1::Method method, const google::protobuf::RepeatedPtrField<std::string>& exclude,
-                         uint32_t verify_candidates, bool with_changes, grpc::CallbackServerContext* context) const;
+  Result<Query> RunQuery(const QueryRequest& request, grpc::CallbackServerContext* context) const;
+  // The default method's answer to `request` (prior, sequence or global).
+  Result<Localization> Localise(const QueryRequest& request, const LocalQuery& query, const LocalizeOptions& options,
+                                grpc::CallbackServerContext* context) const;
   // The wire form of a hit: of the default method, and of a paper method
   // (with the pose the planned viewpoints imply, except for BoW).
   v1::MapHit DefaultWireHit(const std::string& collection, const LocalizedHit& hit, const std::string& map_id,
@@ -93,6 +108,7 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable DescriptorCache cache_;
   mutable PreparedMapCache prepared_;
+  mutable RecentFixes fixes_;
 };
 
 }  // namespace lmd::server

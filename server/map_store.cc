@@ -85,6 +85,20 @@ bool RouteFromMetadata(const v1::MapMetadata& meta, MapSource::Route* route) {
   return true;
 }
 
+// Anchors map `id` in `anchors` from its metadata's anchor (if any), with
+// its box and trajectory from the stored map.
+void AnchorFromMetadata(uint64_t id, const v1::MapMetadata& meta, const v1::LocalMap& map, AnchorIndex* anchors) {
+  if (!meta.has_anchor()) return;
+  Point2 lo{1e300, 1e300}, hi{-1e300, -1e300};
+  for (int i = 0; i < map.x_size(); ++i) {
+    lo = {std::min<double>(lo.x, map.x(i)), std::min<double>(lo.y, map.y(i))};
+    hi = {std::max<double>(hi.x, map.x(i)), std::max<double>(hi.y, map.y(i))};
+  }
+  std::vector<Pose2> trajectory;
+  for (const v1::Pose2& p : map.trajectory()) trajectory.push_back(FromProto(p));
+  anchors->Set(id, FromProto(meta.anchor().pose()), lo, hi, trajectory);
+}
+
 // Writes of place features recomputed at open go out in batches of this many.
 constexpr size_t kMigrationBatch = 1000;
 
@@ -225,6 +239,14 @@ Status MapStore::RebuildIndexes() {
     Result<v1::MapMetadata> meta = ReadMetadata(key);  // absent: the counts below report it
     MapSource::Route route;
     if (meta.ok() && RouteFromMetadata(*meta, &route)) state->routes[indexed.index_id()] = route;
+    if (meta.ok() && meta->has_anchor()) {
+      std::string value;
+      v1::StoredMap stored;
+      Status read = FromRocks(db_->Get({}, maps_cf_, key, &value), "reading map " + key);
+      if (!read.ok()) return read;
+      if (!stored.ParseFromString(value)) return Status::Corruption("stored map " + key + " does not parse");
+      AnchorFromMetadata(indexed.index_id(), *meta, stored.map(), &state->anchors);
+    }
     state->map_ids[indexed.index_id()] = key.substr(slash + 1);
     if (++maps % 100000 == 0) spdlog::info("rebuilding indexes: {} maps", maps);
   }
@@ -475,6 +497,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
       state->index.Remove(id);
       state->places.Remove(id);
       state->routes.erase(id);
+      state->anchors.Remove(id);
       state->map_ids.erase(id);
     }
     for (const auto& [id, write] : change.added) {
@@ -483,6 +506,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
       if (!added.ok()) return Status::Internal("index out of step with the store: " + added.message());
       MapSource::Route route;
       if (RouteFromMetadata(write->map.metadata(), &route)) state->routes[id] = route;
+      AnchorFromMetadata(id, write->map.metadata(), write->map.map(), &state->anchors);
       state->map_ids[id] = write->map.metadata().map_id();
     }
   }
@@ -557,6 +581,7 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   state->index.Remove(indexed->index_id());
   state->places.Remove(indexed->index_id());
   state->routes.erase(indexed->index_id());
+  state->anchors.Remove(indexed->index_id());
   state->map_ids.erase(indexed->index_id());
   return Status::Ok();
 }
@@ -658,6 +683,17 @@ std::optional<Pose2> MapStore::AnchorOf(const std::string& collection, uint64_t 
   if (state == nullptr) return std::nullopt;
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
   return state->anchors.Anchor(index_id);
+}
+
+bool MapStore::HasAnchors(const std::string& collection) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return false;
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  return state->anchors.size() > 0;
 }
 
 std::vector<MapSource::Anchored> MapStore::AnchoredNear(const std::string& collection, const Point2& centre,

@@ -62,7 +62,7 @@ struct MapStoreOptions {
 // A map to insert with its descriptor and place features (computed by the
 // caller, outside locks).
 struct MapWrite {
-  v1::StoredMap map;
+  v1::StoredMap map;  // its metadata's anchor, if set, is stored and indexed
   Lmd lmd;
   PlaceFeatures place;
   uint64_t index_id = 0;  // set by InsertMaps: the map's id inside its collection's indexes
@@ -153,6 +153,8 @@ class MapStore {
   bool RouteOf(const std::string& collection, uint64_t index_id, MapSource::Route* route) const;
   // Its anchor in the collection's frame (MapMetadata.anchor), if any.
   std::optional<Pose2> AnchorOf(const std::string& collection, uint64_t index_id) const;
+  // Whether the collection has any anchored map (false if unknown).
+  bool HasAnchors(const std::string& collection) const;
   // The collection's anchored maps whose box meets the disk (AnchorIndex::Near).
   std::vector<MapSource::Anchored> AnchoredNear(const std::string& collection, const Point2& centre,
                                                 double radius_m) const;

@@ -12,6 +12,8 @@
 #include "core/align/relative_pose.h"
 #include "core/index/index.h"
 #include "proto/convert.h"
+#include "core/localize/prior.h"
+#include "core/localize/sequence.h"
 #include "server/indexing.h"
 #include "server/lmd_service.h"
 #include "server/store_map_source.h"
@@ -53,66 +55,138 @@ void ToWire(const Verdict& verdict, v1::Localization* out) {
   out->set_best_score(verdict.best_score);
   out->set_rival_score(verdict.rival_score);
   out->set_agreeing(static_cast<uint32_t>(verdict.agreeing));
+  out->set_prior_used(verdict.prior_used);
+  out->set_prior_failed(verdict.prior_failed);
+  out->set_fell_back_to_global(verdict.fell_back_to_global);
+  out->set_sequence_maps(static_cast<uint32_t>(verdict.sequence_maps));
+  out->set_sequence_agreeing(static_cast<uint32_t>(verdict.sequence_agreeing));
 }
 
 }  // namespace
 
-Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(
-    const std::string& collection, const v1::LocalMap& map, uint32_t top_k, v1::Method method,
-    const google::protobuf::RepeatedPtrField<std::string>& exclude, uint32_t verify_candidates, bool with_changes,
-    grpc::CallbackServerContext* context) const {
+template <typename Request>
+LmdServiceImpl::QueryRequest LmdServiceImpl::QueryOf(const Request& request, bool with_changes) {
+  QueryRequest q;
+  q.collection = &request.collection();
+  q.map = &request.map();
+  q.top_k = request.top_k();
+  q.method = request.method();
+  q.exclude = &request.exclude_map_ids();
+  q.verify_candidates = request.verify_candidates();
+  q.prior = request.has_prior() ? &request.prior() : nullptr;
+  q.sequence = &request.sequence();
+  q.with_changes = with_changes;
+  return q;
+}
+
+Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const LocalQuery& query,
+                                              const LocalizeOptions& options,
+                                              grpc::CallbackServerContext* context) const {
+  const std::unordered_set<std::string> excluded(request.exclude->begin(), request.exclude->end());
+  const StoreMapSource source(store_, &prepared_, *request.collection, excluded);
+  auto cancelled = [context] { return context->IsCancelled(); };
+  if (request.prior != nullptr) {
+    const v1::Prior& wire = *request.prior;
+    Prior prior;
+    prior.pose = FromProto(wire.pose());
+    prior.radius_m = wire.radius_m();
+    prior.heading_sigma_rad = wire.heading_sigma_rad();
+    Localization near = LocalizeNear(query, source, options, prior, {}, cancelled, request.with_changes);
+    if (!near.verdict.prior_failed || !wire.fall_back_to_global()) return near;
+    Localization global = Localize(query, source, options, {}, cancelled, request.with_changes);
+    global.verdict.prior_used = global.verdict.prior_failed = global.verdict.fell_back_to_global = true;
+    return global;
+  }
+  if (!request.sequence->empty()) {
+    std::vector<SequenceStep> steps;
+    for (const v1::SequenceMap& wire : *request.sequence) {
+      SequenceStep step;
+      step.query = PrepareLocalQuery(MethodView(FromProto(wire.map())), options, &Describe(wire.map())->place);
+      step.in_newest = FromProto(wire.in_query());
+      step.travel_m = wire.travel_m();
+      steps.push_back(std::move(step));
+    }
+    return LocalizeSequence(query, steps, source, options, {}, cancelled, request.with_changes);
+  }
+  return Localize(query, source, options, {}, cancelled, request.with_changes);
+}
+
+Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& request,
+                                                       grpc::CallbackServerContext* context) const {
+  const std::string& collection = *request.collection;
   Status valid = ValidateCollectionName(collection);
-  if (valid.ok()) valid = ValidateLocalMap(map, config_, "query map");
+  if (valid.ok()) valid = ValidateLocalMap(*request.map, config_, "query map");
   if (!valid.ok()) return valid;
-  if (top_k > config_.max_top_k) {
-    return Status::InvalidArgument("top_k " + std::to_string(top_k) + " exceeds max_top_k (" +
+  if (request.top_k > config_.max_top_k) {
+    return Status::InvalidArgument("top_k " + std::to_string(request.top_k) + " exceeds max_top_k (" +
                                    std::to_string(config_.max_top_k) + ")");
   }
-  if (static_cast<size_t>(exclude.size()) > config_.max_top_k) {
-    return Status::InvalidArgument(std::to_string(exclude.size()) + " exclude_map_ids exceed max_top_k (" +
+  if (static_cast<size_t>(request.exclude->size()) > config_.max_top_k) {
+    return Status::InvalidArgument(std::to_string(request.exclude->size()) + " exclude_map_ids exceed max_top_k (" +
                                    std::to_string(config_.max_top_k) + ")");
   }
-  if (verify_candidates > config_.max_verify_candidates) {
-    return Status::InvalidArgument("verify_candidates " + std::to_string(verify_candidates) +
+  if (request.verify_candidates > config_.max_verify_candidates) {
+    return Status::InvalidArgument("verify_candidates " + std::to_string(request.verify_candidates) +
                                    " exceeds max_verify_candidates (" +
                                    std::to_string(config_.max_verify_candidates) + ")");
   }
+  valid = ValidatePriorAndSequence(request.prior != nullptr, request.prior ? *request.prior : v1::Prior(),
+                                   *request.sequence, config_);
+  if (!valid.ok()) return valid;
+  const bool default_method = request.method == v1::METHOD_DEFAULT;
+  if (!default_method && (request.prior != nullptr || !request.sequence->empty())) {
+    return Status::InvalidArgument("priors and sequences are answered by the default method only");
+  }
   Result<Method> paper_method = Method::kLmd;
-  if (method != v1::METHOD_DEFAULT) {
-    paper_method = PaperMethod(method, store_->indexing().viewpoint.planner);
+  if (!default_method) {
+    paper_method = PaperMethod(request.method, store_->indexing().viewpoint.planner);
     if (!paper_method.ok()) return paper_method.status();
   }
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
+  if (request.prior != nullptr && !store_->HasAnchors(collection)) {
+    return Status::FailedPrecondition("collection '" + collection +
+                                      "' has no anchored maps: a prior needs maps inserted with a pose_hint");
+  }
 
   Query query;
-  query.described = Describe(map);
-  const size_t wanted = top_k == 0 ? kDefaultTopK : top_k;
-  const std::unordered_set<std::string> excluded(exclude.begin(), exclude.end());
-  if (method == v1::METHOD_DEFAULT) {
+  DescriptorCache::Key key;
+  query.described = Describe(*request.map, &key);
+  const size_t wanted = request.top_k == 0 ? kDefaultTopK : request.top_k;
+  if (default_method) {
     LocalizeOptions options = store_->indexing().localize;
     options.top_k = wanted;
-    options.verify_maps = verify_candidates > 0 ? verify_candidates : config_.verify_candidates;
-    const bool busy = verify_candidates == 0 && config_.busy_queued_calls > 0 &&
+    options.verify_maps = request.verify_candidates > 0 ? request.verify_candidates : config_.verify_candidates;
+    const bool busy = request.verify_candidates == 0 && config_.busy_queued_calls > 0 &&
                       runner_->pool().queued() >= config_.busy_queued_calls;
     if (busy && config_.busy_verify_candidates < options.verify_maps) {
       options.verify_maps = config_.busy_verify_candidates;
       query.reduced_depth = true;
     }
-    const LocalQuery local = PrepareLocalQuery(MethodView(FromProto(map)), options, &query.described->place);
-    const StoreMapSource source(store_, &prepared_, collection, excluded);
-    query.localization = Localize(local, source, options, {}, [context] { return context->IsCancelled(); },
-                                  with_changes);
+    const LocalQuery local = PrepareLocalQuery(MethodView(FromProto(*request.map)), options, &query.described->place);
+    Result<Localization> localization = Localise(request, local, options, context);
+    if (!localization.ok()) return localization.status();
+    query.localization = std::move(localization).value();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled during verification");
     for (const LocalizedHit& hit : query.localization.hits) {
       Result<IndexedEntry> entry = store_->Indexed(collection, hit.map_id);
       query.hit_ids.push_back(entry.ok() ? entry->map_id : std::string());  // empty: deleted meanwhile
     }
-    metrics_->RecordQueryWork(query.localization.stats.search.candidates, query.localization.stats.maps_matched,
-                              query.reduced_depth);
+    // A sure answer against an anchored map anchors this map if it is stored next.
+    const Localization& l = query.localization;
+    if (l.verdict.sure && !l.hits.empty() && l.hits[0].collection_pose && !query.hit_ids[0].empty()) {
+      v1::MapAnchor fix;
+      *fix.mutable_pose() = ToProto(*l.hits[0].collection_pose);
+      fix.set_derived(true);
+      fix.set_from_map_id(query.hit_ids[0]);
+      fix.set_confidence(l.verdict.confidence);
+      fixes_.Put(collection, key, fix);
+    }
+    metrics_->RecordQueryWork(l.stats.search.candidates, l.stats.maps_matched, query.reduced_depth);
     return query;
   }
+  const std::unordered_set<std::string> excluded(request.exclude->begin(), request.exclude->end());
   RetrieveOptions options;
-  options.top_k = wanted + exclude.size();  // excluded maps may take places in the ranking
+  options.top_k = wanted + request.exclude->size();  // excluded maps may take places in the ranking
   options.method = *paper_method;
   Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.described->lmd, options);
   if (!hits.ok()) return hits.status();
@@ -148,8 +222,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
   return runner_->Unary(context, "Retrieve", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     const double cpu_start = ThreadCpuMs();
-    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids(), request->verify_candidates(), false, context);
+    Result<Query> query = RunQuery(QueryOf(*request, false), context);
     if (!query.ok()) return query.status();
     response->set_reduced_depth(query->reduced_depth);
     if (request->method() == v1::METHOD_DEFAULT) {
@@ -182,6 +255,8 @@ v1::MapHit LmdServiceImpl::DefaultWireHit(const std::string& collection, const L
   out.set_verified(true);
   out.set_agrees_with_best(hit.agrees_with_best);
   *out.mutable_pose() = ToProto(hit.pose);
+  if (hit.collection_pose) *out.mutable_collection_pose() = ToProto(*hit.collection_pose);
+  out.set_sequence_agreeing(static_cast<uint32_t>(hit.sequence_agreeing));
   Result<v1::MapMetadata> meta = store_->GetMetadata(collection, map_id);
   if (meta.ok()) *out.mutable_metadata() = std::move(meta).value();
   return out;
@@ -196,8 +271,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     if (!(request->threshold() >= 0) || !std::isfinite(request->threshold())) {
       return Status::InvalidArgument("threshold must be a finite number >= 0 (0: the default)");
     }
-    Result<Query> query = RunQuery(request->collection(), request->map(), request->top_k(), request->method(),
-                                   request->exclude_map_ids(), request->verify_candidates(), true, context);
+    Result<Query> query = RunQuery(QueryOf(*request, true), context);
     if (!query.ok()) return query.status();
     if (context->IsCancelled()) return Status::Cancelled("call cancelled");
     response->set_reduced_depth(query->reduced_depth);

@@ -177,4 +177,38 @@ Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& c
   return ValidateLocalMap(request.map(), config, where);
 }
 
+Status ValidatePriorAndSequence(bool has_prior, const v1::Prior& prior,
+                                const google::protobuf::RepeatedPtrField<v1::SequenceMap>& sequence,
+                                const ServerConfig& config) {
+  if (has_prior && !sequence.empty()) {
+    return Status::InvalidArgument("a query takes a prior or a sequence, not both");
+  }
+  if (has_prior) {
+    Status s = CheckPose(prior.pose(), config.max_abs_coordinate_m, "prior.pose");
+    if (s.ok() && !(prior.radius_m() > 0 && prior.radius_m() <= 100)) {
+      s = Status::InvalidArgument("prior.radius_m must be in (0, 100] m, got " + std::to_string(prior.radius_m()));
+    }
+    if (s.ok() && !(prior.heading_sigma_rad() >= 0 && std::isfinite(prior.heading_sigma_rad()))) {
+      s = Status::InvalidArgument("prior.heading_sigma_rad must be a finite angle >= 0");
+    }
+    if (!s.ok()) return s;
+  }
+  if (static_cast<uint32_t>(sequence.size()) > config.max_sequence_maps) {
+    return Status::InvalidArgument(std::to_string(sequence.size()) + " sequence maps exceed max_sequence_maps (" +
+                                   std::to_string(config.max_sequence_maps) + ")");
+  }
+  for (int i = 0; i < sequence.size(); ++i) {
+    const std::string where = "sequence[" + std::to_string(i) + "]";
+    const v1::SequenceMap& step = sequence[i];
+    if (!step.has_in_query()) return Status::InvalidArgument(where + ".in_query (its pose relative to the query) is missing");
+    Status s = CheckPose(step.in_query(), config.max_abs_coordinate_m, where + ".in_query");
+    if (s.ok() && !(step.travel_m() >= 0 && std::isfinite(step.travel_m()))) {
+      s = Status::InvalidArgument(where + ".travel_m must be a finite distance >= 0");
+    }
+    if (s.ok()) s = ValidateLocalMap(step.map(), config, where + ".map");
+    if (!s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
 }  // namespace lmd::server

@@ -32,4 +32,12 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
 // Metadata and map of one map to insert; `index` is its place in the batch.
 Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index);
 
+// A query's prior (if set) and sequence: not both; a prior's pose finite
+// within the coordinate limit, a radius in (0, 100] m, a heading sigma >= 0;
+// at most max_sequence_maps earlier maps, each a valid local map with its
+// pose relative to the query (in_query) given and finite and a travel >= 0.
+Status ValidatePriorAndSequence(bool has_prior, const v1::Prior& prior,
+                                const google::protobuf::RepeatedPtrField<v1::SequenceMap>& sequence,
+                                const ServerConfig& config);
+
 }  // namespace lmd::server

@@ -57,6 +57,7 @@ struct Verdict {
   size_t agreeing = 0;       // other hits that agree with the best
   bool prior_used = false;   // a prior query (prior.h)
   bool prior_failed = false; // ... and no map near the prior matched
+  bool fell_back_to_global = false;  // ... so a global query answered (lmdd, on request)
   size_t sequence_maps = 0;      // a sequence query: its earlier maps
   size_t sequence_agreeing = 0;  // ... of which fit the best hit's pose
 };

@@ -35,7 +35,6 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
                           const std::function<bool()>& stop, bool with_changes) {
   Localization out;
-  out.verdict.prior_used = true;
   // Where the query's points can lie in the collection's frame.
   double reach = 0.0;
   for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
@@ -100,7 +99,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   match.window_deg = window_deg;
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stop, &out.stats);
   SetCollectionPoses(source, &hits);
-  out.verdict.prior_failed = hits.empty() || hits[0].score < options.confidence.min_score;
+  const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window.
   auto second_pose = [&](const LocalizedHit& best) {
     ScanMatchOptions excluding = match;
@@ -119,6 +118,8 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     return back ? 0.0 : Scored(query, *best.db, second, options).score;
   };
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
+  out.verdict.prior_used = true;
+  out.verdict.prior_failed = failed;
   SetCollectionPoses(source, &out.hits);
   return out;
 }

@@ -1,0 +1,250 @@
+// Anchored collections over gRPC: maps inserted with a pose hint are
+// anchored, prior queries search near the robot's estimate and answer in the
+// collection's frame, sequence queries check a lost robot's earlier maps, a
+// sure answer anchors the map inserted next, and bad priors or sequences are
+// refused without changing anything stored.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/localmap/pose_ops.h"
+#include "core/sim/simulate.h"
+#include "proto/convert.h"
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+const std::vector<LocalMap>& DemoMaps() {
+  static const std::vector<LocalMap> maps = SimulateLocalMaps(DefaultDemoOptions());
+  return maps;
+}
+
+// The stored demo maps: every third of the first 150, anchored by their
+// simulated global frame (as a robot with SLAM would give them).
+constexpr size_t kStored = 150, kStride = 3;
+
+v1::InsertMapRequest AnchoredInsert(const LocalMap& map, size_t sequence) {
+  v1::InsertMapRequest insert = OneMapRequest("site", map.id, ToProto(map)).maps(0);
+  insert.mutable_metadata()->set_robot_id("robot-1");
+  insert.mutable_metadata()->set_sequence(sequence);
+  *insert.mutable_metadata()->mutable_pose_hint() = ToProto(map.truth.global_frame);
+  return insert;
+}
+
+class AnchoredQueryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server_ = std::make_unique<TestServer>(dir_.path());
+    v1::InsertMapsRequest request;
+    for (size_t i = 0; i < kStored; i += kStride) *request.add_maps() = AnchoredInsert(DemoMaps()[i], i + 1);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server_->client().InsertMaps(request, &inserted).ok());
+  }
+
+  // A query of stored map `i` seen again: the same points, nothing excluded
+  // but the map itself.
+  v1::RetrieveRequest Query(size_t i) const {
+    v1::RetrieveRequest request;
+    request.set_collection("site");
+    *request.mutable_map() = ToProto(DemoMaps()[i + 1]);  // the next window: overlaps map i, not stored
+    return request;
+  }
+
+  uint64_t StoredMaps() const {
+    v1::ListCollectionsResponse listed;
+    EXPECT_TRUE(server_->client().ListCollections(&listed).ok());
+    for (const v1::CollectionInfo& c : listed.collections()) {
+      if (c.name() == "site") return c.maps();
+    }
+    return 0;
+  }
+
+  TempDir dir_;
+  std::unique_ptr<TestServer> server_;
+};
+
+double Distance(const v1::Pose2& a, const Pose2& b) { return std::hypot(a.x() - b.x, a.y() - b.y); }
+
+TEST_F(AnchoredQueryTest, APoseHintAnchorsTheMapAndHitsCarryTheCollectionPose) {
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id(DemoMaps()[0].id);
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  ASSERT_TRUE(got.map().metadata().has_anchor());
+  EXPECT_FALSE(got.map().metadata().anchor().derived());
+  EXPECT_LT(Distance(got.map().metadata().anchor().pose(), DemoMaps()[0].truth.global_frame), 1e-3);
+
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(Query(30), &response).ok());
+  ASSERT_GT(response.hits_size(), 0);
+  ASSERT_TRUE(response.hits(0).has_collection_pose());
+  // The query's own frame in the collection's frame: its simulated global frame.
+  EXPECT_LT(Distance(response.hits(0).collection_pose(), DemoMaps()[31].truth.global_frame), 0.1);
+}
+
+TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
+  int localized = 0, asked = 0;
+  for (size_t i = 12; i < kStored - 3; i += 21) {
+    const Pose2 truth = DemoMaps()[i + 1].truth.global_frame;
+    v1::RetrieveRequest request = Query(i);
+    *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.5, truth.y - 1.0, truth.theta + 0.25});
+    request.mutable_prior()->set_radius_m(3.0);
+    request.mutable_prior()->set_heading_sigma_rad(0.3);
+    v1::RetrieveResponse response;
+    ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+    ++asked;
+    EXPECT_TRUE(response.localization().prior_used());
+    EXPECT_FALSE(response.localization().prior_failed()) << i;
+    ASSERT_GT(response.hits_size(), 0);
+    if (response.localization().localized()) {  // a sure answer must be right
+      EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.2) << i;
+      ++localized;
+    }
+  }
+  EXPECT_GE(localized, asked - 2);  // the demo world repeats rooms: a few may stay unsure
+}
+
+TEST_F(AnchoredQueryTest, AWrongPriorSaysSoAndMayFallBackToAGlobalQuery) {
+  const Pose2 truth = DemoMaps()[31].truth.global_frame;
+  v1::RetrieveRequest request = Query(30);
+  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 300.0, truth.y + 300.0, truth.theta});
+  request.mutable_prior()->set_radius_m(2.0);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_TRUE(response.localization().prior_failed());
+  EXPECT_FALSE(response.localization().localized());
+
+  request.mutable_prior()->set_fall_back_to_global(true);
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_TRUE(response.localization().prior_failed());
+  EXPECT_TRUE(response.localization().fell_back_to_global());
+  ASSERT_GT(response.hits_size(), 0);
+  EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
+}
+
+TEST_F(AnchoredQueryTest, ASequenceQuerySaysHowManyOfItsMapsAgree) {
+  const size_t newest = 61;
+  v1::RetrieveRequest request = Query(newest - 1);
+  for (size_t back : {5, 10}) {
+    v1::SequenceMap* step = request.add_sequence();
+    const LocalMap& earlier = DemoMaps()[newest - back];
+    *step->mutable_map() = ToProto(earlier);
+    *step->mutable_in_query() =
+        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
+    step->set_travel_m(static_cast<double>(back));
+  }
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_EQ(response.localization().sequence_maps(), 2u);
+  ASSERT_GT(response.hits_size(), 0);
+  EXPECT_LT(Distance(response.hits(0).collection_pose(), DemoMaps()[newest].truth.global_frame), 0.1);
+  EXPECT_EQ(response.localization().sequence_agreeing(), response.hits(0).sequence_agreeing());
+  EXPECT_GE(response.hits(0).sequence_agreeing(), 1u);
+}
+
+TEST_F(AnchoredQueryTest, ASureAnswerAnchorsTheMapInsertedNext) {
+  const LocalMap& map = DemoMaps()[46];  // not stored; overlaps stored map 45
+  v1::DetectChangesRequest detect;
+  detect.set_collection("site");
+  *detect.mutable_map() = ToProto(map);
+  v1::DetectChangesResponse detected;
+  ASSERT_TRUE(server_->client().DetectChanges(detect, &detected).ok());
+  ASSERT_TRUE(detected.localization().localized());
+
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("site", "new", ToProto(map)), &inserted).ok());
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("new");
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  const v1::MapMetadata& meta = got.map().metadata();
+  ASSERT_TRUE(meta.has_anchor());
+  EXPECT_TRUE(meta.anchor().derived());
+  EXPECT_EQ(meta.anchor().from_map_id(), detected.hits(0).hit().map_id());
+  EXPECT_GT(meta.anchor().confidence(), 0.5);
+  EXPECT_LT(Distance(meta.anchor().pose(), map.truth.global_frame), 0.1);
+
+  // A map no query localised is stored without an anchor.
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("site", "plain", ToProto(DemoMaps()[200])), &inserted).ok());
+  get.set_map_id("plain");
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  EXPECT_FALSE(got.map().metadata().has_anchor());
+}
+
+TEST_F(AnchoredQueryTest, BadPriorsAndSequencesAreRefusedAndNothingChanges) {
+  const uint64_t before = StoredMaps();
+  auto code_of = [&](const v1::RetrieveRequest& request, const std::string& says) {
+    v1::RetrieveResponse response;
+    const grpc::Status status = server_->client().Retrieve(request, &response);
+    EXPECT_NE(status.error_message().find(says), std::string::npos) << status.error_message();
+    return status.error_code();
+  };
+  v1::RetrieveRequest nan_prior = Query(30);
+  nan_prior.mutable_prior()->mutable_pose()->set_x(NAN);
+  nan_prior.mutable_prior()->set_radius_m(2.0);
+  EXPECT_EQ(code_of(nan_prior, "prior.pose.x"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest negative = Query(30);
+  negative.mutable_prior()->set_radius_m(-1.0);
+  EXPECT_EQ(code_of(negative, "prior.radius_m"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest both = Query(30);
+  both.mutable_prior()->set_radius_m(2.0);
+  *both.add_sequence()->mutable_map() = ToProto(DemoMaps()[20]);
+  EXPECT_EQ(code_of(both, "not both"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest no_pose = Query(30);
+  *no_pose.add_sequence()->mutable_map() = ToProto(DemoMaps()[20]);
+  EXPECT_EQ(code_of(no_pose, "sequence[0].in_query"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest ragged = Query(30);
+  v1::SequenceMap* step = ragged.add_sequence();
+  *step->mutable_map() = ToProto(DemoMaps()[20]);
+  step->mutable_map()->add_x(1.0f);  // one x more than y
+  step->mutable_in_query();
+  EXPECT_EQ(code_of(ragged, "sequence[0].map"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest long_sequence = Query(30);
+  for (int i = 0; i < 9; ++i) {
+    v1::SequenceMap* s = long_sequence.add_sequence();
+    *s->mutable_map() = ToProto(DemoMaps()[20]);
+    s->mutable_in_query();
+  }
+  EXPECT_EQ(code_of(long_sequence, "max_sequence_maps"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  v1::RetrieveRequest paper = Query(30);
+  paper.set_method(v1::METHOD_LMD_COG);
+  paper.mutable_prior()->set_radius_m(2.0);
+  EXPECT_EQ(code_of(paper, "default method"), grpc::StatusCode::INVALID_ARGUMENT);
+
+  // A collection without anchored maps cannot take a prior.
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("bare", "a", SquareRoomMap()), &inserted).ok());
+  v1::RetrieveRequest bare = Query(30);
+  bare.set_collection("bare");
+  bare.mutable_prior()->set_radius_m(2.0);
+  EXPECT_EQ(code_of(bare, "no anchored maps"), grpc::StatusCode::FAILED_PRECONDITION);
+
+  EXPECT_EQ(StoredMaps(), before);
+}
+
+TEST_F(AnchoredQueryTest, AnchorsSurviveARestart) {
+  server_->Stop();
+  server_ = std::make_unique<TestServer>(dir_.path());
+  const Pose2 truth = DemoMaps()[31].truth.global_frame;
+  v1::RetrieveRequest request = Query(30);
+  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.0, truth.y, truth.theta});
+  request.mutable_prior()->set_radius_m(2.0);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_FALSE(response.localization().prior_failed());
+  ASSERT_GT(response.hits_size(), 0);
+  EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
+}
+
+}  // namespace
+}  // namespace lmd::testing
