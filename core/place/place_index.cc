@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <tuple>
 
 namespace lmd {
@@ -242,7 +243,16 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
     int turn;
   };
   std::vector<Pair> pairs;
-  for (const PlaceFeature& qf : query.features) {
+  // Golden-ratio stride through the features: any prefix of this order is
+  // spread over the whole list (a stride coprime with the count visits each
+  // once).
+  const size_t n_query = query.features.size();
+  size_t stride = std::max<size_t>(1, static_cast<size_t>(0.618034 * static_cast<double>(n_query)));
+  while (n_query > 1 && std::gcd(stride, n_query) != 1) ++stride;
+  for (size_t k = 0; k < n_query; ++k) {
+    if (options.max_candidates > 0 && work.candidates >= options.max_candidates) break;
+    const PlaceFeature& qf = query.features[(k * stride) % n_query];
+    ++work.features_used;
     pairs.clear();
     for (int turn = 0; turn < 4; ++turn) {
       const PlaceCode code = RotateCode(qf.code, turn);

@@ -345,6 +345,28 @@ TEST(PlaceIndexTest, StatsCountTheWorkOfASearch) {
   EXPECT_EQ(none.maps_voted, 0u);
 }
 
+// A candidate bound stops starting query features once that many stored
+// features were compared; the features read are spread over the map, so the
+// place still wins when the bound is a fraction of the full search's work.
+TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
+  PlaceIndex index;
+  AddStored(&index);
+  const PlaceFeatures query = Describe(MovedPoints(DemoMaps()[140], KnownMoves()[1]));
+  PlaceSearchOptions unbounded;
+  unbounded.max_candidates = 0;
+  PlaceSearchStats full;
+  index.Search(query, unbounded, {}, &full);
+  EXPECT_EQ(full.features_used, query.features.size());
+  PlaceSearchOptions bounded;
+  bounded.max_candidates = full.candidates / 3;
+  PlaceSearchStats cut;
+  const std::vector<PlaceHypothesis> hypotheses = index.Search(query, bounded, {}, &cut);
+  EXPECT_LT(cut.features_used, full.features_used);
+  EXPECT_LT(cut.candidates, full.candidates);
+  ASSERT_FALSE(hypotheses.empty());
+  EXPECT_EQ(hypotheses[0].map_id, 140u);
+}
+
 // A code farther than max_hamming from every stored code does not vote: a
 // query of random codes (64 bits from any stored code on average) finds
 // nothing at 10 bits, while the map's own features find it at 0.
