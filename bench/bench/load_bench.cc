@@ -11,8 +11,11 @@
 #include <thread>
 #include <vector>
 
+#include "bench/bench/reobserve.h"
 #include "client/lmd_client.h"
 #include "core/eval/ground_truth.h"
+#include "core/io/carmen_reader.h"
+#include "core/localmap/local_map_builder.h"
 #include "core/sim/simulate.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -30,6 +33,7 @@ struct LoadOptions {
   double seconds = 10.0;
   bool json = false;
   bool seed = true;
+  std::string log;  // a CARMEN log instead of the simulated world
 };
 
 bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
@@ -46,6 +50,7 @@ bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
     if (flag == "--server") options->server = value;
     else if (flag == "--collection") options->collection = value;
     else if (flag == "--token") options->token = value;
+    else if (flag == "--log") options->log = value;
     else if (flag == "--robots") options->robots = static_cast<int>(std::strtol(value.c_str(), &end, 10));
     else if (flag == "--first-robot") options->first_robot = static_cast<int>(std::strtol(value.c_str(), &end, 10));
     else if (flag == "--hz") options->hz = std::strtod(value.c_str(), &end);
@@ -101,8 +106,56 @@ const LocalMap* MapOfId(const std::string& id, const std::vector<LocalMap>& seed
   const long robot = std::strtol(owner.c_str() + 5, nullptr, 10) - first_robot;
   if (robot < 0 || static_cast<size_t>(robot) >= robot_maps.size()) return nullptr;
   const size_t r = static_cast<size_t>(robot);
-  if (robot_maps[r].empty()) return nullptr;
-  return &robot_maps[r][k % robot_maps[r].size()];
+  return k < robot_maps[r].size() ? &robot_maps[r][k] : nullptr;
+}
+
+// The stored world (seeded) and each robot's maps, one per tick.
+struct World {
+  std::vector<LocalMap> seed;
+  std::vector<std::vector<LocalMap>> robots;
+};
+
+// Robot 0's run through the demo world, and each robot's own route through it
+// (repeated if the route is short).
+World SimulatedWorld(const LoadOptions& options, size_t ticks) {
+  World world;
+  world.seed = SimulateLocalMaps(DefaultDemoOptions());
+  ProgressBar progress("load: simulating robots", options.robots);
+  for (int r = 0; r < options.robots; ++r) {
+    SimulationOptions sim = DefaultDemoOptions();
+    sim.route.seed = 1000 + options.first_robot + r;
+    sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
+    const std::vector<LocalMap> maps = SimulateLocalMaps(sim);
+    world.robots.emplace_back();
+    for (size_t t = 0; t < ticks && !maps.empty(); ++t) world.robots.back().push_back(maps[t % maps.size()]);
+    progress.Add();
+  }
+  return world;
+}
+
+// A real log's local maps (1 m apart): the even ones are stored, and the
+// robots drive the log again through the odd ones, each from its own start
+// (spread over the log) and each seeing them anew (Reobserve: another own
+// frame, 2 cm noise, 10 % of points dropped; two robots never send the same
+// map), as when robots return to a mapped building.
+Result<World> LogWorld(const LoadOptions& options, size_t ticks) {
+  Result<LaserLog> log = ReadCarmenLog(options.log);
+  if (!log.ok()) return log.status();
+  const std::vector<LocalMap> maps = BuildLocalMaps(*log);
+  World world;
+  std::vector<LocalMap> odd;
+  for (size_t i = 0; i < maps.size(); ++i) (i % 2 == 0 ? world.seed : odd).push_back(maps[i]);
+  if (odd.empty()) return Status::InvalidArgument(options.log + " holds fewer than two local maps");
+  for (int r = 0; r < options.robots; ++r) {
+    const size_t start = odd.size() * static_cast<size_t>(options.first_robot + r) /
+                         static_cast<size_t>(options.first_robot + options.robots);
+    world.robots.emplace_back();
+    for (size_t t = 0; t < ticks; ++t) {
+      const uint64_t seed = (static_cast<uint64_t>(options.first_robot + r) << 32) | t;
+      world.robots.back().push_back(Reobserve(odd[(start + t) % odd.size()], seed, 0.02, 0.1));
+    }
+  }
+  return world;
 }
 
 }  // namespace
@@ -121,9 +174,14 @@ int RunLoadBench(int argc, char** argv) {
     return 1;
   }
 
-  // The stored world the robots localise against (seeded by this run or an
-  // earlier one: the same simulation).
-  const std::vector<LocalMap> base = SimulateLocalMaps(DefaultDemoOptions());
+  const size_t ticks = static_cast<size_t>(std::ceil(options.hz * options.seconds));
+  Result<World> world = options.log.empty() ? SimulatedWorld(options, ticks) : LogWorld(options, ticks);
+  if (!world.ok()) {
+    std::fprintf(stderr, "lmd-bench load: %s\n", world.status().message().c_str());
+    return 1;
+  }
+  const std::vector<LocalMap>& base = world->seed;
+  const std::vector<std::vector<LocalMap>>& robot_maps = world->robots;
   if (options.seed) {
     ProgressBar progress("load: seeding " + options.collection, base.size());
     for (size_t i = 0; i < base.size(); i += 25) {
@@ -140,25 +198,11 @@ int RunLoadBench(int argc, char** argv) {
       progress.Add(static_cast<size_t>(request.maps_size()));
     }
   }
-
-  // Each robot's maps: its own route through the demo world, long enough for
-  // one map per tick (repeated if the route is short).
-  const size_t ticks = static_cast<size_t>(std::ceil(options.hz * options.seconds));
   std::vector<std::vector<v1::InsertMapRequest>> plans(options.robots);
-  std::vector<std::vector<LocalMap>> robot_maps(options.robots);
-  {
-    ProgressBar progress("load: simulating robots", options.robots);
-    for (int r = 0; r < options.robots; ++r) {
-      SimulationOptions sim = DefaultDemoOptions();
-      sim.route.seed = 1000 + options.first_robot + r;
-      sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
-      robot_maps[r] = SimulateLocalMaps(sim);
-      const std::vector<LocalMap>& maps = robot_maps[r];
-      const std::string robot = "robot" + std::to_string(options.first_robot + r);
-      for (size_t t = 0; t < ticks && !maps.empty(); ++t) {
-        plans[r].push_back(ToInsert(options.collection, robot, t, maps[t % maps.size()]));
-      }
-      progress.Add();
+  for (int r = 0; r < options.robots; ++r) {
+    const std::string robot = "robot" + std::to_string(options.first_robot + r);
+    for (size_t t = 0; t < robot_maps[r].size(); ++t) {
+      plans[r].push_back(ToInsert(options.collection, robot, t, robot_maps[r][t]));
     }
   }
 
@@ -229,7 +273,7 @@ int RunLoadBench(int argc, char** argv) {
       const LocalMap* hit = MapOfId(top_hits[r][t], base, robot_maps, options.first_robot);
       if (hit == nullptr) continue;
       ++answered;
-      localised += PlaceOverlap(robot_maps[r][t % robot_maps[r].size()], *hit) >= 0.5;
+      localised += PlaceOverlap(robot_maps[r][t], *hit) >= 0.5;
     }
   }
   const double place_at_1 = answered > 0 ? static_cast<double>(localised) / static_cast<double>(answered) : 0.0;

@@ -1,7 +1,7 @@
 // lmd-bench load: a fleet of simulated robots against a running lmdd.
 //
 //   lmd-bench load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]
-//                  [--token T] [--no-seed]
+//                  [--token T] [--no-seed] [--log CARMEN_LOG]
 //
 // The collection is first seeded with robot 0's run through the demo world
 // (unless --no-seed). Then R robots, each on its own route through that world,
@@ -10,7 +10,9 @@
 // time. Reports calls/s and p50/p95/p99 latency over all calls, errors, and
 // how often the top hit of a DetectChanges showed the robot's place (half of
 // its points within 0.3 m of the hit's, in the world frame; computed after
-// the run, for a collection holding the seed and this run's maps only); with --json the last line is {"robots": R, "rps": x, "p50_ms": a,
+// the run, for a collection holding the seed and this run's maps only).
+// --log: the world is a real log's local maps instead, the even ones seeded
+// and the odd ones driven by the robots, each from its own start; with --json the last line is {"robots": R, "rps": x, "p50_ms": a,
 // "p95_ms": b, "p99_ms": c, "errors": n, "place_at_1": p}.
 #pragma once
 

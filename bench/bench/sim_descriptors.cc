@@ -5,6 +5,7 @@
 #include <random>
 #include <thread>
 
+#include "bench/bench/reobserve.h"
 #include "core/describe/describer.h"
 #include "core/sim/simulate.h"
 #include "core/viewpoint/viewpoint.h"
@@ -14,36 +15,6 @@ namespace {
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-// The map seen again from a moved own frame, with noise and dropped points.
-LocalMap Reobserve(const LocalMap& map, uint64_t seed, double noise_m, double drop) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> angle(-M_PI, M_PI), shift(-5.0, 5.0), u(0.0, 1.0);
-  std::normal_distribution<double> noise(0.0, noise_m);
-  const double a = angle(rng), tx = shift(rng), ty = shift(rng), c = std::cos(a), s = std::sin(a);
-  auto move = [&](double x, double y) { return Point2{c * x - s * y + tx, s * x + c * y + ty}; };
-  LocalMap out;
-  out.id = map.id + "-query";
-  out.truth = map.truth;
-  for (const Point2& p : map.points) {
-    if (u(rng) < drop) continue;
-    const Point2 q = move(p.x, p.y);
-    out.points.push_back({q.x + noise(rng), q.y + noise(rng)});
-  }
-  for (const Pose2& p : map.trajectory) {
-    const Point2 q = move(p.x, p.y);
-    out.trajectory.push_back({q.x, q.y, p.theta + a});
-  }
-  for (const Scan& scan : map.scans) {
-    Scan moved = scan;
-    const Point2 q = move(scan.pose.x, scan.pose.y);
-    moved.pose = {q.x, q.y, scan.pose.theta + a};
-    for (float& r : moved.ranges)
-      if (r < moved.max_range) r = static_cast<float>(r + noise(rng));
-    out.scans.push_back(std::move(moved));
-  }
-  return out;
 }
 
 // Describes maps[i] into out[i] on `threads` threads.
