@@ -25,10 +25,14 @@ void Usage(std::FILE* out) {
                "      queries of the nine logs take about 36 min on 2 cores, --max-queries 25 about 3.5 min.\n"
                "  served [--log FILE...] [--out DIR] [--server HOST:PORT | --lmdd PATH] [--seed N]\n"
                "         [--max-queries N] [--threads N] [--verify N] [--tuned-on a,b] [--no-changes]\n"
+               "         [--mode global|prior|sequence] [--anchor]\n"
                "      the protocol through a live lmdd (started on a temporary store unless --server): every\n"
                "      map inserted, then queried with its 10 m neighbours excluded (Retrieve) and with a\n"
                "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv and\n"
                "      served.svg (default DIR: out/served). The nine logs take about 10 min on 2 cores.\n"
+               "      --mode prior: each query with its true pose off by 1-3 m and 10-20 deg as a prior;\n"
+               "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them;\n"
+               "      both (and --anchor) insert every map with its log pose as pose_hint.\n"
                "  export --log FILE... --out DIR\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
 }

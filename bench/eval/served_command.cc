@@ -14,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <unordered_map>
@@ -28,6 +29,7 @@
 #include "bench/eval/served_report.h"
 #include "client/lmd_client.h"
 #include "core/util/progress_bar.h"
+#include "core/localmap/pose_ops.h"
 #include "proto/convert.h"
 
 namespace lmd::eval {
@@ -43,15 +45,35 @@ const std::vector<std::string>& DefaultTunedOn() {
   return logs;
 }
 
+// How each query is asked (DESIGN.md §6).
+enum class QueryMode {
+  kGlobal,    // the map alone
+  kPrior,     // with a prior: the map's true pose in the log's frame, perturbed
+  kSequence,  // with the robot's earlier maps and perturbed odometry to them
+};
+
 struct ServedOptions {
   std::string collection_prefix = "served-";
+  QueryMode mode = QueryMode::kGlobal;
+  // Maps inserted with their pose in the log's frame as pose_hint (a site
+  // map built by the robots' own SLAM): prior and sequence queries need it.
+  bool anchored = false;
+  // Priors off by a uniform 1-3 m in a uniform direction and 10-20 deg, sent
+  // with this radius and heading sigma.
+  double prior_radius_m = 3.5;
+  double prior_sigma_rad = 20.0 * M_PI / 180.0;
+  // Sequences: this many maps in all, each `sequence_spacing` maps (1 m
+  // each) before the next; odometry to them off by 2 % of the distance and
+  // up to 1 deg per metre.
+  size_t sequence_maps = 3;
+  size_t sequence_spacing = 5;
   size_t max_queries = 0;  // per log, 0 = every map
   int threads = 1;         // concurrent queries
   bool changes = true;
   uint32_t verify = 0;     // verify_candidates of each request (0: lmdd's)
 };
 
-Status Insert(const client::LmdClient& client, const Dataset& d, const std::string& collection) {
+Status Insert(const client::LmdClient& client, const Dataset& d, const std::string& collection, bool anchored) {
   ProgressBar bar(d.name + ": inserting", d.maps.size());
   for (size_t first = 0; first < d.maps.size(); first += kInsertBatch) {
     v1::InsertMapsRequest request;
@@ -62,6 +84,7 @@ Status Insert(const client::LmdClient& client, const Dataset& d, const std::stri
       insert->mutable_metadata()->set_map_id(d.maps[i].id);
       insert->mutable_metadata()->set_robot_id(d.name);
       insert->mutable_metadata()->set_sequence(i + 1);
+      if (anchored) *insert->mutable_metadata()->mutable_pose_hint() = ToProto(d.maps[i].truth.global_frame);
       *insert->mutable_map() = ToProto(d.maps[i]);
     }
     if (request.maps_size() == 0) continue;
@@ -120,13 +143,48 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
   return a;
 }
 
+// The prior or the sequence of query `q` (seeded by the query map's index).
+template <typename Request>
+void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& options, uint64_t seed, Request* request) {
+  std::mt19937_64 rng(seed ^ (0x9E3779B97F4A7C15ULL * (q.map + 1)));
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Pose2 truth = d.maps[q.map].truth.global_frame;
+  if (options.mode == QueryMode::kPrior) {
+    const double distance = 1.0 + 2.0 * u(rng), direction = 2 * M_PI * u(rng);
+    const double turn = (10.0 + 10.0 * u(rng)) * M_PI / 180.0 * (u(rng) < 0.5 ? -1.0 : 1.0);
+    v1::Prior* prior = request->mutable_prior();
+    *prior->mutable_pose() = ToProto(Pose2{truth.x + distance * std::cos(direction),
+                                           truth.y + distance * std::sin(direction), truth.theta + turn});
+    prior->set_radius_m(options.prior_radius_m);
+    prior->set_heading_sigma_rad(options.prior_sigma_rad);
+  }
+  if (options.mode == QueryMode::kSequence) {
+    for (size_t k = 1; k < options.sequence_maps; ++k) {
+      if (q.map < k * options.sequence_spacing) break;
+      const LocalMap& earlier = d.maps[q.map - k * options.sequence_spacing];
+      if (earlier.points.empty()) break;
+      Pose2 odometry = Compose(Inverse(truth), earlier.truth.global_frame);
+      const double travel = d.maps[q.map].truth.travel_start - earlier.truth.travel_start;
+      const double direction = 2 * M_PI * u(rng);
+      odometry.x += 0.02 * travel * std::cos(direction);
+      odometry.y += 0.02 * travel * std::sin(direction);
+      odometry.theta += (2.0 * u(rng) - 1.0) * travel * M_PI / 180.0;
+      v1::SequenceMap* step = request->add_sequence();
+      *step->mutable_map() = ToProto(earlier);
+      *step->mutable_in_query() = ToProto(odometry);
+      step->set_travel_m(travel);
+    }
+  }
+}
+
 struct QueryRecord {
   AnswerOutcome still, changed;
   double best_score = 0, rival_score = 0, changed_best = 0, changed_rival = 0;
   uint32_t agreeing = 0;
 };
 
-Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, const ServedOptions& options) {
+Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, const ServedOptions& options,
+                         uint64_t seed) {
   const std::string collection = options.collection_prefix + d.name;
   v1::ListCollectionsResponse listed;
   grpc::Status status = client.ListCollections(&listed);
@@ -136,7 +194,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
       return Status::InvalidArgument("collection '" + collection + "' already holds maps: use a fresh lmdd");
     }
   }
-  Status inserted = Insert(client, d, collection);
+  Status inserted = Insert(client, d, collection, options.anchored);
   if (!inserted.ok()) return inserted;
 
   std::unordered_map<std::string, size_t> index_of;
@@ -162,6 +220,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
       for (size_t j = 0; j < d.maps.size(); ++j) {
         if (candidates.count(j) == 0 && !d.maps[j].points.empty()) retrieve.add_exclude_map_ids(d.maps[j].id);
       }
+      AddContext(d, q, options, seed, &retrieve);
       v1::RetrieveResponse answer;
       auto t0 = Clock::now();
       grpc::Status s = client.Retrieve(retrieve, &answer);
@@ -184,6 +243,8 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
         *detect.mutable_map() = ToProto(q.changed);
         detect.set_verify_candidates(options.verify);
         *detect.mutable_exclude_map_ids() = retrieve.exclude_map_ids();
+        if (retrieve.has_prior()) *detect.mutable_prior() = retrieve.prior();
+        *detect.mutable_sequence() = retrieve.sequence();
         v1::DetectChangesResponse changes;
         t0 = Clock::now();
         s = client.DetectChanges(detect, &changes);
@@ -255,7 +316,7 @@ std::vector<std::string> SplitCommas(const std::string& s) {
 
 int RunServed(int argc, char** argv) {
   Args args;
-  if (!args.Parse(argc, argv, 0, {"no-changes"})) {
+  if (!args.Parse(argc, argv, 0, {"no-changes", "anchor"})) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
@@ -281,6 +342,17 @@ int RunServed(int argc, char** argv) {
     return 2;
   }
   options.changes = !args.Has("no-changes");
+  const std::string mode = args.Get("mode", "global");
+  if (mode == "prior") {
+    options.mode = QueryMode::kPrior;
+  } else if (mode == "sequence") {
+    options.mode = QueryMode::kSequence;
+  } else if (mode != "global") {
+    std::fprintf(stderr, "lmd-eval served: --mode is global, prior or sequence, not '%s'\n", mode.c_str());
+    return 2;
+  }
+  options.anchored = args.Has("anchor") || options.mode != QueryMode::kGlobal;
+  options.collection_prefix = "served-" + mode + "-";
   const std::vector<std::string> tuned_on =
       args.Has("tuned-on") ? SplitCommas(args.Get("tuned-on")) : DefaultTunedOn();
   const std::string out_dir = args.Get("out", "out/served");
@@ -324,7 +396,7 @@ int RunServed(int argc, char** argv) {
       std::fprintf(stderr, "lmd-eval served: %s\n", d.status().ToString().c_str());
       return 1;
     }
-    Result<ServedLog> log = RunLog(**client, *d, options);
+    Result<ServedLog> log = RunLog(**client, *d, options, dataset.seed);
     if (!log.ok()) {
       std::fprintf(stderr, "lmd-eval served: %s\n", log.status().message().c_str());
       return 1;
