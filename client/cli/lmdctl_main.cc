@@ -34,7 +34,11 @@ constexpr char kUsage[] =
     "--scan-matching poses by scan matching; --allow-nan reads NaN ranges as no return; --salvage reads a cut-off file.\n"
     "ingest --anchor stores each map with its first pose in the log's or bag's frame as pose hint (export-map draws them).\n"
     "--exclude ID[,ID...] leaves those stored maps out of query / changes / render hits;\n"
-    "--verify N verifies the index's best N hits geometrically (default: the server's, 10; more when lost);\n"
+    "--verify N verifies the index's best N hits geometrically (default: the server's, 20; more when lost);\n"
+    "--prior X,Y,THETA[,RADIUS] (m, m, deg, m; radius 2) is the query's pose in an anchored collection's frame:\n"
+    "only maps near it are matched (--prior-sigma DEG heading uncertainty, 15; --fall-back: a global answer if none\n"
+    "matches); --sequence K (with --log / --bag) adds the K maps before --map, --sequence-step maps apart (5), with\n"
+    "their relative poses from the route, so that a look-alike place must fit the whole sequence;\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 
@@ -82,7 +86,7 @@ std::string Required(const Args& args, const std::string& key) {
 }
 
 int Main(int argc, char** argv) {
-  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor"});
+  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor", "fall-back"});
   if (!args.ok()) return Fail(args.status().message(), 2);
   if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {
     std::fputs(kUsage, args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? stderr : stdout);
@@ -94,7 +98,8 @@ int Main(int argc, char** argv) {
   const Status known = CheckKnownOptions(
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
               "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
-              "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution"});
+              "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution", "prior", "prior-sigma",
+              "sequence", "sequence-step"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

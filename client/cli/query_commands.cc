@@ -3,7 +3,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "client/cli/commands.h"
 #include "client/cli/insert_maps.h"
@@ -26,18 +29,54 @@ Result<v1::Method> MethodFromArgs(const Args& args) {
   return Status::InvalidArgument("--method must be default, lmd-cor, lmd-cog or bow, got '" + name + "'");
 }
 
-// Fills the collection, map, top_k, method, verification depth (--verify N)
-// and excluded ids (--exclude ID[,ID...]) of a Retrieve or DetectChanges
-// request; 2 after printing a
+// --prior X,Y,THETA_DEG[,RADIUS_M] (with --prior-sigma DEG, --fall-back):
+// the query map's own frame in the collection's frame.
+Result<v1::Prior> PriorFromArgs(const Args& args) {
+  const std::string text = args.Get("prior");
+  std::vector<double> values;
+  for (size_t begin = 0; begin <= text.size();) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    const std::string word = text.substr(begin, end - begin);
+    char* stop = nullptr;
+    const double v = std::strtod(word.c_str(), &stop);
+    if (word.empty() || *stop != '\0' || !std::isfinite(v)) {
+      return Status::InvalidArgument("--prior must be X,Y,THETA[,RADIUS] (m, m, deg, m), got '" + text + "'");
+    }
+    values.push_back(v);
+    begin = end + 1;
+  }
+  if (values.size() != 3 && values.size() != 4) {
+    return Status::InvalidArgument("--prior must be X,Y,THETA[,RADIUS] (m, m, deg, m), got '" + text + "'");
+  }
+  Result<double> sigma = GetMetres(args, "prior-sigma", 15.0, 0.0, 180.0);  // degrees, same bounds check
+  if (!sigma.ok()) return Status::InvalidArgument("--prior-sigma must be a heading uncertainty from 0 to 180 deg");
+  v1::Prior prior;
+  *prior.mutable_pose() = ToProto(Pose2{values[0], values[1], values[2] * M_PI / 180.0});
+  prior.set_radius_m(values.size() == 4 ? values[3] : 2.0);
+  prior.set_heading_sigma_rad(*sigma * M_PI / 180.0);
+  prior.set_fall_back_to_global(args.Switch("fall-back"));
+  return prior;
+}
+
+// Fills the collection, map, top_k, method, verification depth (--verify N),
+// excluded ids (--exclude ID[,ID...]), prior (--prior) and sequence
+// (--sequence K) of a Retrieve or DetectChanges request; 2 after printing a
 // usage error, 1 after another error, else 0.
 template <typename Request>
 int FillQuery(const CommandContext& ctx, Request* request) {
   request->set_collection(Required(ctx.args, "collection"));
   if (request->collection().empty()) return 2;
+  if (ctx.args.Has("prior") && ctx.args.Has("sequence")) return Fail("give --prior or --sequence, not both", 2);
   bool usage_error = false;
-  Result<LocalMap> map = QueryMapFromArgs(ctx.args, &usage_error);
-  if (!map.ok()) return Fail(map.status().message(), usage_error ? 2 : 1);
-  *request->mutable_map() = ToProto(*map);
+  Result<QueryInput> query = QueryFromArgs(ctx.args, &usage_error);
+  if (!query.ok()) return Fail(query.status().message(), usage_error ? 2 : 1);
+  *request->mutable_map() = ToProto(query->map);
+  for (v1::SequenceMap& earlier : query->sequence) *request->add_sequence() = std::move(earlier);
+  if (ctx.args.Has("prior")) {
+    Result<v1::Prior> prior = PriorFromArgs(ctx.args);
+    if (!prior.ok()) return Fail(prior.status().message(), 2);
+    *request->mutable_prior() = *prior;
+  }
   Result<long> top_k = GetPositive(ctx.args, "top-k", 10);
   if (!top_k.ok()) return Fail(top_k.status().message(), 2);
   request->set_top_k(static_cast<uint32_t>(*top_k));
@@ -66,19 +105,33 @@ void PrintHit(const v1::MapHit& hit) {
   if (hit.has_pose()) {
     std::printf("  pose=(%.2f m, %.2f m, %.1f deg)", hit.pose().x(), hit.pose().y(), hit.pose().theta() * 180 / M_PI);
   }
+  if (hit.has_collection_pose()) {
+    const v1::Pose2& p = hit.collection_pose();
+    std::printf("  site=(%.2f m, %.2f m, %.1f deg)", p.x(), p.y(), p.theta() * 180 / M_PI);
+  }
   std::printf("%s\n", hit.verified() && hit.agrees_with_best() ? "  same place as the first" : "");
 }
 
 // The verdict line of a default-method answer.
 void PrintLocalization(const v1::Localization& l, bool json) {
   if (json) {
-    std::printf("{\"localized\":%s,\"confidence\":%.4f,\"best_score\":%.4f,\"rival_score\":%.4f,\"agreeing\":%u}\n",
-                l.localized() ? "true" : "false", l.confidence(), l.best_score(), l.rival_score(), l.agreeing());
+    std::printf("%s\n", ToJsonLine(l).c_str());
     return;
   }
   std::printf("%s (confidence %.3f: best score %.3f, best rival %.3f, %u other hits agree)\n",
               l.localized() ? "localized: the first hit's pose can be acted on" : "not localized: no hit is sure",
               l.confidence(), l.best_score(), l.rival_score(), l.agreeing());
+  if (l.fell_back_to_global()) {
+    std::printf("the prior failed (no map near it matched): answered as a global query\n");
+  } else if (l.prior_failed()) {
+    std::printf("the prior failed: no map near it matched (--fall-back asks for a global query in the same call)\n");
+  } else if (l.prior_used()) {
+    std::printf("answered within the prior\n");
+  }
+  if (l.sequence_maps() > 0) {
+    std::printf("%u of the sequence's %u earlier maps fit the first hit's pose\n", l.sequence_agreeing(),
+                l.sequence_maps());
+  }
 }
 
 constexpr const char* kReducedDepthNote =

@@ -6,6 +6,7 @@
 #include "client/points_file.h"
 #include "core/io/carmen_reader.h"
 #include "core/localmap/local_map_builder.h"
+#include "core/localmap/pose_ops.h"
 #include "proto/convert.h"
 
 namespace lmd::cli {
@@ -75,24 +76,36 @@ Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* 
   return maps;
 }
 
-Result<LocalMap> QueryMapFromArgs(const Args& args, bool* usage_error) {
+Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
   bool ignored = false;
   bool& usage = usage_error ? *usage_error : ignored;
   usage = true;
   if (args.Has("file") + args.Has("log") + args.Has("bag") != 1) {
     return Status::InvalidArgument("give the query map as --file POINTS or as --log FILE --map K (or --bag PATH --map K)");
   }
+  Result<long> earlier = GetPositive(args, "sequence", 1, 16);
+  Result<long> spacing = GetPositive(args, "sequence-step", 5, 1000);
+  if (!earlier.ok()) return earlier.status();
+  if (!spacing.ok()) return spacing.status();
   if (args.Has("file")) {
+    if (args.Has("sequence")) return Status::InvalidArgument("--sequence needs --log or --bag (a points file has no route)");
     usage = false;
     Result<v1::LocalMap> map = client::ReadPointsFile(args.Get("file"));
     if (!map.ok()) return map.status();
-    return FromProto(*map);
+    return QueryInput{FromProto(*map), {}};
   }
   const char* source = args.Has("bag") ? "--bag" : "--log";
   if (!args.Has("map")) return Status::InvalidArgument(std::string(source) + " needs --map K (0-based map number)");
   char* end = nullptr;
   const long k = std::strtol(args.Get("map").c_str(), &end, 10);
   if (*end != '\0' || k < 0) return Status::InvalidArgument("--map must be a map number >= 0");
+  const size_t sequence = args.Has("sequence") ? static_cast<size_t>(*earlier) : 0;
+  const size_t step = static_cast<size_t>(*spacing);
+  if (static_cast<size_t>(k) < sequence * step) {
+    return Status::InvalidArgument("--sequence " + std::to_string(sequence) + " with --sequence-step " +
+                                   std::to_string(step) + " needs --map " + std::to_string(sequence * step) +
+                                   " or later");
+  }
   usage = false;
   Result<std::vector<LocalMap>> maps = args.Has("bag") ? LocalMapsFromBag(args, nullptr) : LocalMapsFromLog(args);
   if (!maps.ok()) return maps.status();
@@ -102,7 +115,17 @@ Result<LocalMap> QueryMapFromArgs(const Args& args, bool* usage_error) {
                                    std::string(args.Has("bag") ? "bag" : "log") + " gives " +
                                    std::to_string(maps->size()) + " local maps");
   }
-  return std::move((*maps)[k]);
+  QueryInput input;
+  input.map = std::move((*maps)[k]);
+  // The route's poses stand in for the robot's odometry between its maps.
+  for (size_t i = 1; i <= sequence; ++i) {
+    const LocalMap& before = (*maps)[k - i * step];
+    v1::SequenceMap* map = &input.sequence.emplace_back();
+    *map->mutable_map() = ToProto(before);
+    *map->mutable_in_query() = ToProto(Compose(Inverse(input.map.truth.global_frame), before.truth.global_frame));
+    map->set_travel_m(input.map.truth.travel_start - before.truth.travel_start);
+  }
+  return input;
 }
 
 }  // namespace lmd::cli

@@ -29,9 +29,18 @@ Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args);
 // which topics and pose source were used. Errors name the bag and message.
 Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* summary);
 
-// The query map named by --file or by --log / --bag and --map. InvalidArgument if
-// none or several are given, or --map is out of range: then *usage_error (if
-// not null) is set true; it stays false when the file itself is at fault.
-Result<LocalMap> QueryMapFromArgs(const Args& args, bool* usage_error = nullptr);
+// A query map and, for a sequence query, the robot's earlier maps.
+struct QueryInput {
+  LocalMap map;
+  std::vector<v1::SequenceMap> sequence;  // each with its own frame in the query map's
+};
+
+// The query map named by --file or by --log / --bag and --map; with
+// --sequence K (a log or bag only) also the K maps before it, --sequence-step
+// maps apart (5, i.e. 5 m at the default --step), their relative poses from
+// the log's or bag's poses. InvalidArgument if none or several sources are
+// given, or --map or the sequence is out of range: then *usage_error (if not
+// null) is set true; it stays false when the file itself is at fault.
+Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error = nullptr);
 
 }  // namespace lmd::cli

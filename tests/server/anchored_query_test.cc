@@ -116,6 +116,7 @@ TEST_F(AnchoredQueryTest, AWrongPriorSaysSoAndMayFallBackToAGlobalQuery) {
   ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
   EXPECT_TRUE(response.localization().prior_failed());
   EXPECT_FALSE(response.localization().localized());
+  EXPECT_EQ(response.hits_size(), 0);
 
   request.mutable_prior()->set_fall_back_to_global(true);
   ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());

@@ -1,13 +1,16 @@
 // lmdctl as a user runs it: exit codes, one line on stderr for errors, and
 // one JSON object per line with --json.
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sys/wait.h>
 
 #include <gtest/gtest.h>
 
+#include "core/io/carmen_reader.h"
 #include "core/io/carmen_writer.h"
+#include "core/localmap/local_map_builder.h"
 #include "core/sim/simulate.h"
 #include "tests/server/test_server.h"
 
@@ -184,6 +187,43 @@ TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   std::string first_line;
   std::getline(svg, first_line);
   EXPECT_NE(first_line.find("<svg"), std::string::npos) << first_line;
+}
+
+TEST_F(LmdctlLogTest, PriorsAndSequencesReachLmddAndItsVerdictIsPrinted) {
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  const std::string log = dir_.path() + "/robot.log";
+  ASSERT_EQ(RunLmdctl(base + "ingest --anchor --collection fleet --log " + log, dir_).exit_code, 0);
+  Result<LaserLog> read = ReadCarmenLog(log);
+  ASSERT_TRUE(read.ok());
+  const std::vector<LocalMap> maps = BuildLocalMaps(*read);
+  ASSERT_GT(maps.size(), 12u);
+  const Pose2 truth = maps[12].truth.global_frame;
+  auto prior = [&](double dx) {
+    char text[96];
+    std::snprintf(text, sizeof text, " --prior %.3f,%.3f,%.2f,2", truth.x + dx, truth.y, truth.theta * 180 / M_PI + 5);
+    return std::string(text);
+  };
+  CliRun near = RunLmdctl(base + "--json query --collection fleet --top-k 2 --log " + log + " --map 12" + prior(0.8),
+                          dir_);
+  ASSERT_EQ(near.exit_code, 0) << near.err;
+  EXPECT_NE(near.out.find("\"prior_used\":true,\"prior_failed\":false"), std::string::npos) << near.out;
+  EXPECT_NE(near.out.find("\"map_id\":\"robot-12\""), std::string::npos) << near.out;
+  CliRun far = RunLmdctl(base + "query --collection fleet --log " + log + " --map 12" + prior(200), dir_);
+  ASSERT_EQ(far.exit_code, 0) << far.err;
+  EXPECT_NE(far.out.find("the prior failed"), std::string::npos) << far.out;
+  EXPECT_EQ(far.out.find("robot-"), std::string::npos) << far.out;  // no hit far from every map
+
+  CliRun sequence = RunLmdctl(base + "--json query --collection fleet --sequence 2 --log " + log + " --map 12", dir_);
+  ASSERT_EQ(sequence.exit_code, 0) << sequence.err;
+  EXPECT_NE(sequence.out.find("\"sequence_maps\":2"), std::string::npos) << sequence.out;
+
+  for (const std::string bad : {" --map 12 --prior 1,2", " --map 12 --prior 1,nan,0", " --map 3 --sequence 2",
+                                " --map 12 --sequence 2 --prior 1,2,3"}) {
+    CliRun run = RunLmdctl(base + "query --collection fleet --log " + log + bad, dir_);
+    EXPECT_EQ(run.exit_code, 2) << bad;
+    EXPECT_EQ(CountLines(run.err), 1) << bad << ": " << run.err;
+  }
 }
 
 TEST_F(LmdctlLogTest, QueryNeedsExactlyOneSourceOfTheMap) {
