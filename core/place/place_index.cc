@@ -243,15 +243,28 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
     int turn;
   };
   std::vector<Pair> pairs;
-  // Golden-ratio stride through the features: any prefix of this order is
-  // spread over the whole list (a stride coprime with the count visits each
-  // once).
+  // Rarest features first (fewest stored features in their buckets, over
+  // the four turns): they are the cheapest to look up and, like rare words
+  // in a text index, the most telling; a bound on the work then drops the
+  // common ones, which cost most and tell least.
   const size_t n_query = query.features.size();
-  size_t stride = std::max<size_t>(1, static_cast<size_t>(0.618034 * static_cast<double>(n_query)));
-  while (n_query > 1 && std::gcd(stride, n_query) != 1) ++stride;
-  for (size_t k = 0; k < n_query; ++k) {
+  std::vector<std::pair<size_t, size_t>> order;  // (stored features in its buckets, feature)
+  order.reserve(n_query);
+  for (size_t i = 0; i < n_query; ++i) {
+    size_t crowd = 0;
+    for (int turn = 0; turn < 4; ++turn) {
+      const PlaceCode code = RotateCode(query.features[i].code, turn);
+      for (int t = 0; t < kTables; ++t) {
+        const size_t size = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(code, t)].size();
+        if (max_bucket == 0 || size <= max_bucket) crowd += size;
+      }
+    }
+    order.push_back({crowd, i});
+  }
+  if (options.max_candidates > 0) std::sort(order.begin(), order.end());
+  for (const auto& [crowd, index] : order) {
     if (options.max_candidates > 0 && work.candidates >= options.max_candidates) break;
-    const PlaceFeature& qf = query.features[(k * stride) % n_query];
+    const PlaceFeature& qf = query.features[index];
     ++work.features_used;
     pairs.clear();
     for (int turn = 0; turn < 4; ++turn) {

@@ -56,12 +56,15 @@ struct PlaceSearchOptions {
   size_t max_hypotheses = 40;      // returned, best first
   size_t hypotheses_per_map = 2;   // distinct translations or turns per map
   // Stored features compared per query, at most (0 = no bound): the query's
-  // features are read in an order that spreads over the map, and none is
-  // started once this many have been compared. The search's cost grows with
-  // how many stored maps show the query's place; a place seen by hundreds of
-  // maps (a fleet passing one spot every second) needs few of the query's
-  // features to win. The nine real logs compare 11k-64k per query (mean per
-  // log), the densest simulated fleet store 700k.
+  // features are read rarest first (fewest stored features in their
+  // buckets) and none is started once this many have been compared. The
+  // search's cost grows with how crowded the query's buckets are: by a place
+  // seen by hundreds of maps (a fleet passing one spot every second), or by
+  // codes common all over a large site. Rare codes are the telling ones in
+  // both cases. Measured: frcampus (held out, 1,631 maps) compares 767k per
+  // query unbounded; bounded, place@1 0.760 -> 0.755 and search 8.0 -> 4.3 ms
+  // (reading in any fixed order instead: 0.636); a dense fleet store of
+  // 4,295 maps search 9.4 -> 2.0 ms, place .963 -> .972.
   size_t max_candidates = 100000;
 };
 

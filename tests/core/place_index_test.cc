@@ -346,8 +346,8 @@ TEST(PlaceIndexTest, StatsCountTheWorkOfASearch) {
 }
 
 // A candidate bound stops starting query features once that many stored
-// features were compared; the features read are spread over the map, so the
-// place still wins when the bound is a fraction of the full search's work.
+// features were compared; the rarest features are read first, so the place
+// still wins when the bound is a fraction of the full search's work.
 TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
   PlaceIndex index;
   AddStored(&index);
