@@ -92,7 +92,14 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
     prior.radius_m = wire.radius_m();
     prior.heading_sigma_rad = wire.heading_sigma_rad();
     Localization near = LocalizeNear(query, source, options, prior, {}, cancelled, request.with_changes);
-    if (!near.verdict.prior_failed || !wire.fall_back_to_global()) return near;
+    if (!near.verdict.prior_failed) return near;
+    if (!wire.fall_back_to_global()) {
+      // Nothing near the prior shows the place: its maps, matched at their
+      // best pose anyway, would only be noise to a robot.
+      near.hits.clear();
+      near.changes.clear();
+      return near;
+    }
     Localization global = Localize(query, source, options, {}, cancelled, request.with_changes);
     global.verdict.prior_used = global.verdict.prior_failed = global.verdict.fell_back_to_global = true;
     return global;

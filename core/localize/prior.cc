@@ -120,9 +120,6 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;
-  // Nothing near the prior shows the place: its maps, matched at their best
-  // pose anyway, would only be noise to a robot.
-  if (failed) out.hits.clear();
   SetCollectionPoses(source, &out.hits);
   return out;
 }

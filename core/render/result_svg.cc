@@ -29,12 +29,17 @@ std::string RenderResultSvg(const ResultPicture& picture) {
     for (const Point2& p : picture.true_change) region.push_back(TransformPoint(picture.query_in_db, p));
     svg.Polyline(region, {"#2ca02c", 2.0, "none", 1.0, ""}, /*closed=*/true);
   }
+  // One circle per mask point, one rank label per mask (above its highest
+  // point: a label per point stacked them on top of each other).
   for (size_t rank = 0; rank < picture.masks.size(); ++rank) {
+    if (picture.masks[rank].empty()) continue;
+    Point2 top{0, std::numeric_limits<double>::lowest()};
     for (const Point2& p : picture.masks[rank]) {
       const Point2 at = TransformPoint(picture.query_in_db, p);
       svg.Circle(at, 7.0, {"#d62728", 2.0, "none", 1.0, ""});
-      svg.Text({at.x + 0.3, at.y + 0.3}, std::to_string(rank + 1), 12.0, "#d62728");
+      if (at.y > top.y) top = at;
     }
+    svg.TextPx(svg.PxX(top.x) + 8, svg.PxY(top.y) - 8, std::to_string(rank + 1), 12.0, "#d62728");
   }
   svg.TextPx(10, 20, picture.title, 14.0);
   svg.TextPx(10, 38, "grey: stored map   blue: query map (aligned)   red: change masks (rank)   green: true change",

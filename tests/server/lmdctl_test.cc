@@ -226,6 +226,34 @@ TEST_F(LmdctlLogTest, PriorsAndSequencesReachLmddAndItsVerdictIsPrinted) {
   }
 }
 
+// README command 1's job: robot 2 relocalises from sequences, then tracks
+// with priors; every figure is checked against the simulator's truth. A
+// sure answer must never be wrong, and once sure robot 2 must stay right.
+TEST_F(LmdctlTest, TheDemoRelocalisesRobotTwoAndIsNeverSureAndWrong) {
+  TestServer server(data_.path());
+  CliRun demo = RunLmdctl("--server " + server.address() + " demo --out " + dir_.path(), dir_);
+  ASSERT_EQ(demo.exit_code, 0) << demo.err;
+  int right = 0, sent = 0, sure = 0, sure_wrong = 0;
+  const size_t at = demo.out.find("summary: ");
+  ASSERT_NE(at, std::string::npos) << demo.out;
+  ASSERT_EQ(std::sscanf(demo.out.c_str() + at, "summary: %d/%d", &right, &sent), 2) << demo.out;
+  const size_t verdicts = demo.out.find("lmdd was sure of ", at);
+  ASSERT_NE(verdicts, std::string::npos);
+  ASSERT_EQ(std::sscanf(demo.out.c_str() + verdicts, "lmdd was sure of %d, %d", &sure, &sure_wrong), 2);
+  EXPECT_GT(sent, 10);
+  EXPECT_GT(sure, 0);
+  EXPECT_EQ(sure_wrong, 0) << demo.out;
+  EXPECT_GE(right, sure);
+  // After the first sure fix robot 2 tracks with priors: no map after it is lost again.
+  const size_t first_prior = demo.out.find(" prior, ");
+  ASSERT_NE(first_prior, std::string::npos) << demo.out;
+  EXPECT_EQ(demo.out.find("lost:", first_prior), std::string::npos) << demo.out;
+  std::ifstream site(dir_.path() + "/site.svg");
+  std::string first_line;
+  std::getline(site, first_line);
+  EXPECT_NE(first_line.find("<svg"), std::string::npos);
+}
+
 TEST_F(LmdctlLogTest, QueryNeedsExactlyOneSourceOfTheMap) {
   CliRun run = RunLmdctl("query --collection fleet", dir_);
   EXPECT_EQ(run.exit_code, 2);
