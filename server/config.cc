@@ -100,6 +100,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "retain_maps_per_collection") return SetUnsigned(key, value, &config->retain_maps_per_collection);
   if (key == "busy_queued_calls") return SetUnsigned(key, value, &config->busy_queued_calls);
   if (key == "busy_verify_candidates") return SetUnsigned(key, value, &config->busy_verify_candidates);
+  if (key == "busy_search_candidates") return SetUnsigned(key, value, &config->busy_search_candidates);
   for (const char* removed : {"max_maps_scored", "busy_max_maps_scored", "reverse_conflict_weight",
                               "verify_enough_matches", "default_max_offset_m", "bound_skip_postings_per_map"}) {
     if (key == removed) {

@@ -92,8 +92,11 @@ struct ServerConfig {
   // wait for a worker scan matches `busy_verify_candidates` maps (if less than
   // verify_candidates), and says so in its response (reduced_depth). A
   // request that names its own verify_candidates is not reduced. 0: never.
-  uint32_t busy_queued_calls = 8;
-  uint32_t busy_verify_candidates = 8;
+  uint32_t busy_queued_calls = 4;
+  uint32_t busy_verify_candidates = 5;
+  // ... and its first stage compares at most this many stored features
+  // (PlaceSearchOptions::max_candidates, 100k otherwise; 0: the same bound).
+  uint32_t busy_search_candidates = 20000;
   // true: the paper methods' LMD index holds each feature with its 3 m inner
   // word too, 64 features per map (WithInnerWords,
   // core/describe/describer.h). Fixed when a store is created (a store made

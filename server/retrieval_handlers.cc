@@ -169,6 +169,11 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       options.verify_maps = config_.busy_verify_candidates;
       query.reduced_depth = true;
     }
+    if (busy && config_.busy_search_candidates > 0 &&
+        (options.search.max_candidates == 0 || config_.busy_search_candidates < options.search.max_candidates)) {
+      options.search.max_candidates = config_.busy_search_candidates;
+      query.reduced_depth = true;
+    }
     const LocalQuery local = PrepareLocalQuery(MethodView(FromProto(*request.map)), options, &query.described->place);
     Result<Localization> localization = Localise(request, local, options, context);
     if (!localization.ok()) return localization.status();

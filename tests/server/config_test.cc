@@ -15,7 +15,7 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   const std::string path = dir.path() + "/lmdd.conf";
   std::ofstream(path) << "# lmdd\nlisten = 127.0.0.1:6000\nmax_top_k = 50  # small\nsync_writes = true\n"
                       << "verify_candidates = 12\nprepared_map_cache_mb = 32\n"
-                      << "busy_queued_calls = 4\nbusy_verify_candidates = 2\n"
+                      << "busy_queued_calls = 4\nbusy_verify_candidates = 2\nbusy_search_candidates = 5000\n"
                       << "retain_maps_per_collection = 5000\n";
   ServerConfig config;
   ASSERT_TRUE(LoadConfigFile(path, &config).ok());
@@ -26,6 +26,7 @@ TEST(ConfigTest, FileSetsFieldsAndIgnoresComments) {
   EXPECT_EQ(config.prepared_map_cache_mb, 32u);
   EXPECT_EQ(config.busy_queued_calls, 4u);
   EXPECT_EQ(config.busy_verify_candidates, 2u);
+  EXPECT_EQ(config.busy_search_candidates, 5000u);
   EXPECT_EQ(config.retain_maps_per_collection, 5000u);
 }
 
