@@ -38,8 +38,15 @@ struct PreparedMapOptions {
   // Free space (PrepareMap only, maps with scans or a trajectory): beams
   // ray-cast on a grid (cell 0.1 m, cropped 12 m around the trajectory) so
   // that query points landing in space the db map saw empty count as conflicts.
+  // Scans 10 cm apart and within 5 deg clear nearly the same 10 cm cells:
+  // one is traced.
   bool free_space = true;
-  GridOptions free_grid;
+  GridOptions free_grid = [] {
+    GridOptions grid;
+    grid.min_scan_spacing_m = 0.25;
+    grid.min_scan_turn_deg = 5.0;
+    return grid;
+  }();
 };
 
 // One pyramid level: value(x, y) for x in [-pad, width - pad), y alike.

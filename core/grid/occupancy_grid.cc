@@ -163,7 +163,14 @@ OccupancyGrid BuildOccupancyGrid(const LocalMap& map, double rotation, const Gri
     // Occupied cells only (below).
   } else if (!map.scans.empty()) {
     uint8_t* cells = grid.mutable_cells();
+    const Pose2* traced = nullptr;
     for (const Scan& sc : map.scans) {
+      if (traced != nullptr &&
+          std::hypot(sc.pose.x - traced->x, sc.pose.y - traced->y) < options.min_scan_spacing_m &&
+          std::abs(std::remainder(sc.pose.theta - traced->theta, 2 * M_PI)) * 180 / M_PI < options.min_scan_turn_deg) {
+        continue;
+      }
+      traced = &sc.pose;
       const Point2 o = rot(sc.pose.x, sc.pose.y);
       const double clear = std::min<double>(options.no_return_clear_m, sc.max_range);
       for (size_t i = 0; i < sc.ranges.size(); ++i) {

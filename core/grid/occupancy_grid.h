@@ -32,6 +32,12 @@ struct GridOptions {
   // read only occupied cells, so a planner that needs no rooms skips the
   // ray casting, most of the grid's cost.
   bool free_space = true;
+  // Free space is traced from a scan only once its pose is this far from the
+  // last traced one, or turned this much (0: every scan). Scans a few cm
+  // apart clear the same cells: a fast laser (fr079: 55 scans of 360 beams
+  // per 5 m map, 11 times intel's rays) would otherwise cost that much more.
+  double min_scan_spacing_m = 0.0;
+  double min_scan_turn_deg = 0.0;
 };
 
 // A rotated, axis-aligned grid. Cell (ix, iy) covers, in grid axes,

@@ -248,6 +248,8 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
   // in a text index, the most telling; a bound on the work then drops the
   // common ones, which cost most and tell least.
   const size_t n_query = query.features.size();
+  constexpr size_t kBucketsPerFeature = 4 * kTables;  // every turn in every table
+  std::vector<uint32_t> bucket_of(n_query * kBucketsPerFeature);  // kept for the search below
   std::vector<std::pair<size_t, size_t>> order;  // (stored features in its buckets, feature)
   order.reserve(n_query);
   for (size_t i = 0; i < n_query; ++i) {
@@ -255,7 +257,9 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
     for (int turn = 0; turn < 4; ++turn) {
       const PlaceCode code = RotateCode(query.features[i].code, turn);
       for (int t = 0; t < kTables; ++t) {
-        const size_t size = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(code, t)].size();
+        const uint32_t b = (static_cast<uint32_t>(t) << kKeyBits) | Key(code, t);
+        bucket_of[i * kBucketsPerFeature + turn * kTables + t] = b;
+        const size_t size = buckets_[b].size();
         if (max_bucket == 0 || size <= max_bucket) crowd += size;
       }
     }
@@ -272,7 +276,7 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
       nearest.clear();
       int worst = options.max_hamming;  // admits distance <= worst while not full
       for (int t = 0; t < kTables; ++t) {
-        const std::vector<uint32_t>& bucket = buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(code, t)];
+        const std::vector<uint32_t>& bucket = buckets_[bucket_of[index * kBucketsPerFeature + turn * kTables + t]];
         ++work.lookups;
         if (max_bucket > 0 && bucket.size() > max_bucket) continue;
         work.candidates += bucket.size();

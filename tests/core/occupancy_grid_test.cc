@@ -78,6 +78,42 @@ TEST(OccupancyGridTest, ABeamFreesTheCellsItCrossesUpToItsReturn) {
   }
 }
 
+// A scan close to the last traced one (position and heading) is not traced;
+// one far enough in either is.
+TEST(OccupancyGridTest, ScansCloseToATracedOneAreSkipped) {
+  LocalMap map = OneBeamMap();
+  Scan near = map.scans[0];
+  near.pose = {0.05, -0.15, 0.0};     // 20 cm aside
+  near.ranges = {10.0f, 1.0f};        // would clear along +x, a row below the first scan's beam
+  Scan turned = near;
+  turned.pose = {0.15, 0.05, -M_PI / 2};  // 10 cm from the first, turned: traced
+  turned.ranges = {1.0f, 10.0f};          // clears 1 m along -y
+  map.scans.push_back(near);
+  map.scans.push_back(turned);
+  GridOptions options;
+  options.crop_m = 0;
+  options.no_return_clear_m = 4.0;
+  options.min_scan_spacing_m = 0.25;
+  options.min_scan_turn_deg = 5.0;
+  const OccupancyGrid grid = BuildOccupancyGrid(map, 0.0, options);
+  auto state = [&](double x, double y) {
+    int ix, iy;
+    grid.CellOf({x, y}, &ix, &iy);
+    return grid.at(ix, iy);
+  };
+  EXPECT_EQ(state(3.05, 0.05), CellState::kOccupied);  // the first scan's return stays
+  EXPECT_EQ(state(0.15, -0.55), CellState::kFree);     // the turned scan was traced
+  options.min_scan_spacing_m = 0.0;
+  options.min_scan_turn_deg = 0.0;
+  const OccupancyGrid every = BuildOccupancyGrid(map, 0.0, options);
+  int ix, iy;
+  every.CellOf({3.05, 0.05}, &ix, &iy);
+  EXPECT_EQ(every.at(ix, iy), CellState::kOccupied);  // points are occupied either way
+  every.CellOf({1.55, -0.15}, &ix, &iy);
+  EXPECT_EQ(every.at(ix, iy), CellState::kFree);  // the near scan's beam, traced when every scan is
+  EXPECT_NE(state(1.55, -0.15), CellState::kFree);
+}
+
 TEST(OccupancyGridTest, MapsWithoutScansAreFreeNearTheTrajectory) {
   LocalMap map;
   map.trajectory = {{0, 0, 0}, {4, 0, 0}};
