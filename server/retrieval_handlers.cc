@@ -94,10 +94,11 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
     Localization near = LocalizeNear(query, source, options, prior, {}, cancelled, request.with_changes);
     if (!near.verdict.prior_failed) return near;
     if (!wire.fall_back_to_global()) {
-      // Nothing near the prior shows the place: its maps, matched at their
-      // best pose anyway, would only be noise to a robot.
-      near.hits.clear();
-      near.changes.clear();
+      // Maps near a wrong prior matched at their best pose anyway: those
+      // that explain nothing of the query would only be noise to a robot.
+      near.hits.erase(std::remove_if(near.hits.begin(), near.hits.end(),
+                                     [](const LocalizedHit& h) { return h.score <= 0; }),
+                      near.hits.end());
       return near;
     }
     Localization global = Localize(query, source, options, {}, cancelled, request.with_changes);

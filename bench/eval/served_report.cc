@@ -109,15 +109,18 @@ std::string Json(const ServedRun& run, bool with_changes) {
 // Bars per log: place@1, share of sure answers, precision of sure answers.
 std::string Svg(const ServedRun& run) {
   const size_t n = run.logs.size();
-  const double group_w = 3.6, height = 1.0;
-  SvgWriter svg(-1.2, -0.35, std::max<double>(1.0, n) * group_w + 0.4, height + 0.25, 960);
+  // The writer scales both axes alike: a value of 1 is `height` world units,
+  // a third of the plot's width.
+  const double group_w = 3.6, width = std::max<double>(1.0, n) * group_w, height = width / 3;
+  const double line = height / 14;  // one text line below the axis
+  SvgWriter svg(-1.2, -2.6 * line, width + 0.4, height * 1.12, 960);
   const SvgStyle axis{"#444", 1.0, "none", 1.0, ""};
-  svg.Line({0, 0}, {n * group_w, 0}, axis);
-  for (double y : {0.5, 0.9, 1.0}) {
-    svg.Line({0, y}, {n * group_w, y}, SvgStyle{"#bbb", 0.5, "none", 1.0, "3 3"});
+  svg.Line({0, 0}, {width, 0}, axis);
+  for (double y : {0.0, 0.25, 0.5, 0.75, 0.9, 1.0}) {
+    svg.Line({0, y * height}, {width, y * height}, SvgStyle{"#bbb", 0.5, "none", 1.0, "3 3"});
     char label[16];
-    std::snprintf(label, sizeof label, "%.1f", y);
-    svg.Text({-0.15, y - 0.015}, label, 11, "#444", "end");
+    std::snprintf(label, sizeof label, "%.2g", y);
+    svg.Text({-0.15, y * height - 0.1 * line}, label, 11, "#444", "end");
   }
   const char* colours[3] = {"#1f77b4", "#ff7f0e", "#2ca02c"};
   const char* names[3] = {"place@1", "sure share", "sure right"};
@@ -128,11 +131,11 @@ std::string Svg(const ServedRun& run) {
       const double x0 = i * group_w + 0.3 + b * 1.0;
       svg.Rect(x0, 0, x0 + 0.9, values[b] * height, SvgStyle{"none", 0, colours[b], 1.0, ""});
     }
-    svg.Text({i * group_w + 1.8, -0.12}, run.logs[i].name, 13, "black", "middle");
+    svg.Text({i * group_w + 1.8, -1.0 * line}, run.logs[i].name, 13, "black", "middle");
   }
   for (int b = 0; b < 3; ++b) {
-    svg.Rect(b * 3.2, -0.3, b * 3.2 + 0.3, -0.22, SvgStyle{"none", 0, colours[b], 1.0, ""});
-    svg.Text({b * 3.2 + 0.45, -0.3}, names[b], 12);
+    svg.Rect(b * 3.2, -2.3 * line, b * 3.2 + 0.3, -1.8 * line, SvgStyle{"none", 0, colours[b], 1.0, ""});
+    svg.Text({b * 3.2 + 0.45, -2.3 * line}, names[b], 12);
   }
   svg.TextPx(480, 16, "lmd-eval served: per log", 14, "black", "middle");
   return svg.ToString();

@@ -39,6 +39,16 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
   return Scored(query, db, m, options);
 }
 
+void SortHits(std::vector<LocalizedHit>* hits) {
+  // Equal scores (a map that explains every query point, and its route
+  // neighbour that does too): the one that explains them more closely first.
+  std::stable_sort(hits->begin(), hits->end(), [](const LocalizedHit& a, const LocalizedHit& b) {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
+    return a.map_id < b.map_id;
+  });
+}
+
 std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
                                            const std::vector<Candidate>& candidates, const LocalizeOptions& options,
                                            const ScanMatchOptions& match, const std::function<bool()>& stop,
@@ -65,13 +75,7 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
     hit.db = std::move(db);
     hits.push_back(std::move(hit));
   }
-  // Equal scores (a map that explains every query point, and its route
-  // neighbour that does too): the one that explains them more closely first.
-  std::stable_sort(hits.begin(), hits.end(), [](const LocalizedHit& a, const LocalizedHit& b) {
-    if (a.score != b.score) return a.score > b.score;
-    if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
-    return a.map_id < b.map_id;
-  });
+  SortHits(&hits);
   stats->verify_ms += MsSince(t);
   return hits;
 }
@@ -147,13 +151,10 @@ LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const
   return q;
 }
 
-namespace {
+namespace localize_internal {
 
-// The maps to verify, in order of their best hypothesis, each with all its
-// hypotheses as guesses; route neighbours of chosen maps passed over.
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
-                                                           const std::vector<PlaceHypothesis>& hypotheses,
-                                                           const LocalizeOptions& options) {
+                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options) {
   std::vector<Candidate> candidates;
   std::vector<MapSource::Route> chosen_routes;
   std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; kPassed: passed over
@@ -182,10 +183,6 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
   }
   return candidates;
 }
-
-}  // namespace
-
-namespace localize_internal {
 
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,

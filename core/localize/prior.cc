@@ -1,7 +1,9 @@
 #include "core/localize/prior.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <unordered_set>
 
 #include "core/align/correlative_search.h"
 #include "core/localize/verification.h"
@@ -13,8 +15,68 @@ using namespace localize_internal;
 
 namespace {
 
-// Maps nearest the query's path bounded per map matched.
-constexpr size_t kBoundedPerMatched = 4;
+constexpr size_t kBoundedPerMatched = 4;  // maps nearest the query's path bounded per map matched
+constexpr size_t kPriorHypotheses = 200;  // first-stage hypotheses over the maps near the prior
+constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
+
+// The maps whose robot drove nearest to where the query's did (at the prior)
+// -- they saw the same place from the same spots -- and of those the ones
+// whose grids could explain the query within the prior window best (the
+// search's own bound at its coarsest level), each with the pose the prior
+// implies in it. *match: the window that covers the prior.
+std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                                         const Prior& prior, std::vector<MapSource::Anchored> near,
+                                         ScanMatchOptions* match) {
+  std::vector<Point2> path;
+  for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
+  if (path.empty()) path.push_back({prior.pose.x, prior.pose.y});
+  auto gap = [&](const MapSource::Anchored& a) {
+    double best = 1e300;
+    for (const Point2& q : path) {
+      for (const Point2& p : a.path) best = std::min(best, std::hypot(p.x - q.x, p.y - q.y));
+    }
+    return best;
+  };
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t i = 0; i < near.size(); ++i) order.push_back({gap(near[i]), i});
+  std::sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : near[a.second].map_id < near[b.second].map_id;
+  });
+  if (order.size() > kBoundedPerMatched * options.prior_maps) order.resize(kBoundedPerMatched * options.prior_maps);
+  *match = options.match;
+  match->window_m = prior.radius_m + options.prior_margin_m;
+  double window_deg = match->window_deg;
+  std::vector<std::pair<double, Candidate>> bounded;
+  for (const auto& [g, i] : order) {
+    const MapSource::Anchored& a = near[i];
+    std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
+    if (!db) continue;
+    // At the turn the two compasses give (the heading is known modulo 90 deg
+    // to a fraction of a degree) when it lies within the prior's heading
+    // uncertainty; else across the prior's whole heading range.
+    Pose2 guess = Compose(Inverse(a.pose), prior.pose);
+    const double quarter = M_PI / 2;
+    const double compass = db->heading - query.map->heading;
+    const double snapped = compass + quarter * std::round(std::remainder(guess.theta - compass, 2 * M_PI) / quarter);
+    const double off = std::abs(std::remainder(snapped - guess.theta, 2 * M_PI));
+    if (off <= 2 * prior.heading_sigma_rad + match->window_deg * M_PI / 180) {
+      guess.theta = snapped;
+    } else {
+      window_deg = std::max(window_deg, (2 * prior.heading_sigma_rad) * 180 / M_PI + match->window_deg);
+    }
+    SearchRegion region;
+    region.theta = guess.theta;
+    region.centroid_target = TransformPoint(guess, query.match.centroid);
+    region.half_window_x_m = region.half_window_y_m = match->window_m;
+    const double bound = CorrelativeBound(query.match.search_points, *db, region);
+    bounded.push_back({bound, Candidate{a.map_id, {guess}, bound, bounded.size()}});
+  }
+  std::stable_sort(bounded.begin(), bounded.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < bounded.size() && i < options.prior_maps; ++i) candidates.push_back(bounded[i].second);
+  match->window_deg = window_deg;
+  return candidates;
+}
 
 }  // namespace
 
@@ -35,83 +97,75 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
                           const std::function<bool()>& stop, bool with_changes) {
   Localization out;
+  out.verdict.prior_used = true;
   // Where the query's points can lie in the collection's frame.
   double reach = 0.0;
   for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
-  const Point2 at{prior.pose.x, prior.pose.y};
-  std::vector<MapSource::Anchored> near = source.AnchoredNear(at, prior.radius_m + reach);
+  std::vector<MapSource::Anchored> near = source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach);
   near.erase(std::remove_if(near.begin(), near.end(),
                             [&](const MapSource::Anchored& a) { return excluded && excluded(a.map_id); }),
              near.end());
-  // Maps whose robot drove nearest to where the query's did (at the prior)
-  // first: they saw the same place from the same spots.
-  std::vector<Point2> path;
-  for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
-  if (path.empty()) path.push_back(at);
-  auto gap = [&](const MapSource::Anchored& a) {
-    double best = 1e300;
-    for (const Point2& q : path) {
-      for (const Point2& p : a.path) best = std::min(best, std::hypot(p.x - q.x, p.y - q.y));
-    }
-    return best;
+  const double max_off_m = prior.radius_m + options.prior_margin_m;
+  const double max_turn = 2 * prior.heading_sigma_rad + options.match.window_deg * M_PI / 180;
+  auto inside = [&](uint64_t map_id, const Pose2& in_map) {
+    const std::optional<Pose2> anchor = source.AnchorOf(map_id);
+    if (!anchor) return false;
+    const Pose2 p = Compose(*anchor, in_map);
+    return std::hypot(p.x - prior.pose.x, p.y - prior.pose.y) <= max_off_m &&
+           std::abs(std::remainder(p.theta - prior.pose.theta, 2 * M_PI)) <= max_turn;
   };
-  std::vector<std::pair<double, size_t>> order;
-  for (size_t i = 0; i < near.size(); ++i) order.push_back({gap(near[i]), i});
-  std::sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : near[a.second].map_id < near[b.second].map_id;
-  });
-  std::vector<MapSource::Anchored> ranked;
-  for (const auto& [g, i] : order) ranked.push_back(std::move(near[i]));
-  near = std::move(ranked);
-  // Of the nearest, those whose grids could explain the query within the
-  // window best (the search's own bound at its coarsest level) are matched.
-  if (near.size() > kBoundedPerMatched * options.prior_maps) near.resize(kBoundedPerMatched * options.prior_maps);
-  ScanMatchOptions match = options.match;
-  match.window_m = prior.radius_m + options.prior_margin_m;
-  double window_deg = match.window_deg;
-  std::vector<std::pair<double, Candidate>> bounded;
-  for (const MapSource::Anchored& a : near) {
-    std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
-    if (!db) continue;
-    // At the turn the two compasses give (the heading is known modulo 90 deg
-    // to a fraction of a degree) when it lies within the prior's heading
-    // uncertainty; else across the prior's whole heading range.
-    Pose2 guess = Compose(Inverse(a.pose), prior.pose);
-    const double quarter = M_PI / 2;
-    const double compass = db->heading - query.map->heading;
-    const double snapped = compass + quarter * std::round(std::remainder(guess.theta - compass, 2 * M_PI) / quarter);
-    const double off = std::abs(std::remainder(snapped - guess.theta, 2 * M_PI));
-    if (off <= 2 * prior.heading_sigma_rad + match.window_deg * M_PI / 180) {
-      guess.theta = snapped;
-    } else {
-      window_deg = std::max(window_deg, (2 * prior.heading_sigma_rad) * 180 / M_PI + match.window_deg);
-    }
-    SearchRegion region;
-    region.theta = guess.theta;
-    region.centroid_target = TransformPoint(guess, query.match.centroid);
-    region.half_window_x_m = region.half_window_y_m = match.window_m;
-    const double bound = CorrelativeBound(query.match.search_points, *db, region);
-    bounded.push_back({bound, Candidate{a.map_id, {guess}, bound, bounded.size()}});
+  // Two sets of candidates, verified each in its own window. The nearest
+  // maps at the pose the prior implies: right when the prior is close and
+  // the first stage is not (a view its features do not tell apart). And the
+  // first stage over the maps near the prior only: it says which of them
+  // show what the query shows, and where, whatever the prior's error; its
+  // hypotheses that put the query outside the prior are look-alikes
+  // elsewhere on the site (a map near the prior also shows places away from it).
+  ScanMatchOptions near_match;
+  const std::vector<Candidate> nearest = NearestCandidates(query, source, options, prior, near, &near_match);
+  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
+  std::vector<uint64_t> ids;
+  for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
+  LocalizeOptions stage = options;
+  stage.search.only = &ids;
+  stage.search.max_hypotheses = kPriorHypotheses;
+  stage.verify_maps = options.prior_maps;
+  std::vector<PlaceHypothesis> hypotheses;
+  if (!ids.empty()) {
+    const auto t = std::chrono::steady_clock::now();
+    hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
+    out.stats.search_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   }
-  std::stable_sort(bounded.begin(), bounded.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-  std::vector<Candidate> candidates;
-  for (size_t i = 0; i < bounded.size() && i < options.prior_maps; ++i) candidates.push_back(bounded[i].second);
-  match.window_deg = window_deg;
-  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stop, &out.stats);
+  hypotheses.erase(std::remove_if(hypotheses.begin(), hypotheses.end(),
+                                  [&](const PlaceHypothesis& h) {
+                                    return !inside(h.map_id, HypothesisPose(h, query.map->heading));
+                                  }),
+                   hypotheses.end());
+  out.stats.hypotheses = hypotheses.size();
+  ScanMatchOptions stage_match = options.match;
+  stage_match.window_m += kStageSlackM;  // the first stage's translation is good to its 1 m vote cell
+  for (LocalizedHit& hit : VerifyCandidates(query, source, ChooseCandidates(query, source, hypotheses, stage),
+                                            stage, stage_match, stop, &out.stats)) {
+    hits.push_back(std::move(hit));
+  }
+  // Each map once, at its better fit; none that the match moved outside the prior.
+  SortHits(&hits);
+  std::unordered_set<uint64_t> seen;
+  hits.erase(std::remove_if(hits.begin(), hits.end(),
+                            [&](const LocalizedHit& h) { return !inside(h.map_id, h.pose) || !seen.insert(h.map_id).second; }),
+             hits.end());
   SetCollectionPoses(source, &hits);
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
-  // Another pose of the best map within the prior window.
+  // Another pose of the best map within the prior window (at its heading:
+  // another turn would be outside the prior's).
   auto second_pose = [&](const LocalizedHit& best) {
-    ScanMatchOptions excluding = match;
+    ScanMatchOptions excluding = options.match;
+    excluding.window_m = max_off_m;
     excluding.correlative.exclude_centroid = TransformPoint(best.pose, query.match.centroid);
     excluding.correlative.exclude_theta = best.pose.theta;
     excluding.correlative.exclude_radius_m = options.self_rival_radius_m;
     excluding.correlative.exclude_angle_rad = options.self_rival_angle_deg * M_PI / 180;
-    Pose2 guess = best.pose;
-    for (const Candidate& c : candidates) {
-      if (c.map_id == best.map_id) guess = c.guesses[0];
-    }
-    const ScanMatch second = MatchLocalMaps(query.match, *best.db, {guess}, excluding);
+    const ScanMatch second = MatchLocalMaps(query.match, *best.db, {best.pose}, excluding);
     const Point2 p = TransformPoint(second.pose, query.match.centroid);
     const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
                                  p.y - excluding.correlative.exclude_centroid.y) <= options.self_rival_radius_m;

@@ -1,8 +1,8 @@
 // Prior queries: a robot that tracks its pose sends it, with its
-// uncertainty, in the collection's frame. Only the anchored maps that can
-// overlap the prior region are matched, each in a window around the pose the
-// prior implies in it, so that a look-alike elsewhere on the site cannot
-// win and the answer costs a few scan matches instead of a search.
+// uncertainty, in the collection's frame. The first stage runs over the
+// anchored maps that can overlap the prior region only, its best few are
+// verified, and hits that put the query outside the prior are dropped, so
+// that a look-alike elsewhere on the site cannot win.
 #pragma once
 
 #include <functional>

@@ -24,6 +24,15 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
 
+// The maps to verify (at most options.verify_maps), in order of their best
+// hypothesis, each with all its hypotheses as guesses; route neighbours of
+// chosen maps passed over.
+std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
+                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options);
+
+// Best first: score, then the closer fit, then the map id.
+void SortHits(std::vector<LocalizedHit>* hits);
+
 // Scan matches each candidate near its guesses with `match` (options.match,
 // or a wider window), best hits first (score, then the closer fit, then the
 // map id). Stops once `stop` says so; counts into stats.

@@ -247,6 +247,14 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
   // the four turns): they are the cheapest to look up and, like rare words
   // in a text index, the most telling; a bound on the work then drops the
   // common ones, which cost most and tell least.
+  std::vector<char> allowed;  // by slot, when options.only is set
+  if (options.only != nullptr) {
+    allowed.assign(slot_id_.size(), 0);
+    for (uint64_t id : *options.only) {
+      const auto it = id_to_slot_.find(id);
+      if (it != id_to_slot_.end()) allowed[it->second] = 1;
+    }
+  }
   const size_t n_query = query.features.size();
   constexpr size_t kBucketsPerFeature = 4 * kTables;  // every turn in every table
   std::vector<uint32_t> bucket_of(n_query * kBucketsPerFeature);  // kept for the search below
@@ -279,11 +287,15 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
         const std::vector<uint32_t>& bucket = buckets_[bucket_of[index * kBucketsPerFeature + turn * kTables + t]];
         ++work.lookups;
         if (max_bucket > 0 && bucket.size() > max_bucket) continue;
-        work.candidates += bucket.size();
+        if (allowed.empty()) work.candidates += bucket.size();  // else: those of allowed maps, below
         const size_t count = bucket.size();
         for (size_t b = 0; b < count; ++b) {
           if (b + kPrefetch < count) __builtin_prefetch(&codes_[bucket[b + kPrefetch]]);
           const uint32_t handle = bucket[b];
+          if (!allowed.empty()) {
+            if (!allowed[chunk_slot_[handle / kChunk]]) continue;
+            ++work.candidates;
+          }
           const PlaceCode& stored = codes_[handle];
           const int d = HammingDistance(code, stored);
           if (d > worst) continue;

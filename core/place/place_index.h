@@ -66,6 +66,9 @@ struct PlaceSearchOptions {
   // (reading in any fixed order instead: 0.636); a dense fleet store of
   // 4,295 maps search 9.4 -> 2.0 ms, place .963 -> .972.
   size_t max_candidates = 100000;
+  // When set, only these maps are compared (a prior query's maps near its
+  // prior): the others' stored features are passed over unread.
+  const std::vector<uint64_t>* only = nullptr;
 };
 
 // Pose hypothesis for one stored map: db compass = R(k * 90 deg) query compass + translation.

@@ -367,6 +367,28 @@ TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
   EXPECT_EQ(hypotheses[0].map_id, 140u);
 }
 
+// `only` restricts the search to those maps: the others are never
+// returned, and their stored features are not counted as compared.
+TEST(PlaceIndexTest, OnlyTheNamedMapsAreSearched) {
+  PlaceIndex index;
+  AddStored(&index);
+  const PlaceFeatures query = Describe(MovedPoints(DemoMaps()[70], KnownMoves()[0]));
+  PlaceSearchStats all;
+  ASSERT_EQ(SearchDefault(index, query, {}, &all).at(0).map_id, 70u);
+  const std::vector<uint64_t> others = {7, 140, 210};
+  PlaceSearchOptions options;
+  options.only = &others;
+  PlaceSearchStats some;
+  const std::vector<PlaceHypothesis> hypotheses = index.Search(query, options, {}, &some);
+  for (const PlaceHypothesis& h : hypotheses) EXPECT_TRUE(h.map_id == 7 || h.map_id == 140 || h.map_id == 210) << h.map_id;
+  EXPECT_LT(some.candidates, all.candidates);
+  const std::vector<uint64_t> itself = {70};
+  options.only = &itself;
+  const std::vector<PlaceHypothesis> found = index.Search(query, options);
+  ASSERT_FALSE(found.empty());
+  EXPECT_EQ(found[0].map_id, 70u);
+}
+
 // A code farther than max_hamming from every stored code does not vote: a
 // query of random codes (64 bits from any stored code on average) finds
 // nothing at 10 bits, while the map's own features find it at 0.
