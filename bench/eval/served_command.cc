@@ -52,6 +52,9 @@ enum class QueryMode {
   kSequence,  // with the robot's earlier maps and perturbed odometry to them
 };
 
+// m of travel around a query (and each map of its sequence) whose maps are left out.
+constexpr double kExcludedTravelM = 10.0;
+
 struct ServedOptions {
   std::string collection_prefix = "served-";
   QueryMode mode = QueryMode::kGlobal;
@@ -177,6 +180,25 @@ void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& optio
   }
 }
 
+// The query as the protocol asks it. A sequence query carries its earlier
+// maps: the stored maps within 10 m of travel of any of them are left out
+// too (else an earlier map finds its own route neighbours, which place the
+// newest map where its own excluded neighbours lie), and so are they as
+// places.
+EvalQuery FairQuery(const Dataset& d, EvalQuery q, const ServedOptions& options) {
+  if (options.mode != QueryMode::kSequence) return q;
+  const size_t back = std::min(q.map / options.sequence_spacing, options.sequence_maps - 1) * options.sequence_spacing;
+  const double from = d.maps[q.map - back].truth.travel_start - kExcludedTravelM;
+  const double to = d.maps[q.map].truth.travel_start + kExcludedTravelM;
+  auto near_route = [&](size_t j) {
+    const double t = d.maps[j].truth.travel_start;
+    return t >= from && t <= to;
+  };
+  q.candidates.erase(std::remove_if(q.candidates.begin(), q.candidates.end(), near_route), q.candidates.end());
+  q.places.erase(std::remove_if(q.places.begin(), q.places.end(), near_route), q.places.end());
+  return q;
+}
+
 struct QueryRecord {
   AnswerOutcome still, changed;
   double best_score = 0, rival_score = 0, changed_best = 0, changed_rival = 0;
@@ -211,7 +233,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
   ProgressBar bar(d.name + ": querying", qs.size());
   auto worker = [&] {
     for (size_t k = next++; k < qs.size(); k = next++) {
-      const EvalQuery& q = d.queries[qs[k]];
+      const EvalQuery q = FairQuery(d, d.queries[qs[k]], options);
       const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
       v1::RetrieveRequest retrieve;
       retrieve.set_collection(collection);

@@ -93,9 +93,12 @@ struct LocalizeOptions {
   }();
   size_t top_k = 10;  // hits returned
   // Prior queries (prior.h): anchored maps matched, nearest the predicted
-  // query first, and the window beyond the prior's radius.
+  // query first, and the window beyond the prior's radius; with
+  // prior_first_stage, as many again from the first stage over the maps near
+  // the prior (a sequence's check of where a hypothesis puts each map skips it).
   size_t prior_maps = 4;
   double prior_margin_m = 1.0;
+  bool prior_first_stage = true;
   // Sequence queries (sequence.h): hypotheses of the newest map checked
   // against the earlier maps; odometry drift allowed per metre travelled
   // (position, m/m; heading, rad/m) on top of the scan matching window.

@@ -131,7 +131,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   stage.search.max_hypotheses = kPriorHypotheses;
   stage.verify_maps = options.prior_maps;
   std::vector<PlaceHypothesis> hypotheses;
-  if (!ids.empty()) {
+  if (options.prior_first_stage && !ids.empty()) {
     const auto t = std::chrono::steady_clock::now();
     hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
     out.stats.search_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
