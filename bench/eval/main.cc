@@ -29,9 +29,10 @@ void Usage(std::FILE* out) {
                "      the protocol through a live lmdd (started on a temporary store unless --server): every\n"
                "      map inserted, then queried with its 10 m neighbours excluded (Retrieve) and with a\n"
                "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv and\n"
-               "      served.svg (default DIR: out/served). The nine logs take about 10 min on 2 cores.\n"
+               "      served.svg (default DIR: out/served). The nine logs take about 3 min on 2 cores.\n"
                "      --mode prior: each query with its true pose off by 1-3 m and 10-20 deg as a prior;\n"
-               "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them;\n"
+               "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
+               "      maps within 10 m of each excluded);\n"
                "      both (and --anchor) insert every map with its log pose as pose_hint.\n"
                "  export --log FILE... --out DIR\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
