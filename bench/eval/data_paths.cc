@@ -35,9 +35,14 @@ std::vector<std::string> LogsIn(const std::string& dir) {
   return logs;
 }
 
+bool IsBagPath(const std::string& path) {
+  const std::string ext = fs::path(path).extension().string();
+  return ext == ".mcap" || ext == ".bag" || ext == ".db3" || fs::is_directory(path);
+}
+
 std::string DatasetName(const std::string& path) {
   std::string name = fs::path(path).filename().string();
-  for (const char* ext : {".gz", ".log"}) {
+  for (const char* ext : {".gz", ".log", ".mcap", ".bag", ".db3"}) {
     const std::string e = ext;
     if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0) {
       name.resize(name.size() - e.size());

@@ -18,4 +18,7 @@ std::vector<std::string> LogsIn(const std::string& dir);
 // "aces" for ".../aces.log.gz" (directory and .gz/.log extensions stripped).
 std::string DatasetName(const std::string& path);
 
+// True for a bag: an .mcap, .bag or .db3 file, or a directory (rosbag2).
+bool IsBagPath(const std::string& path);
+
 }  // namespace lmd::eval

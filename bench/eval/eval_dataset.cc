@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "bench/eval/data_paths.h"
+#include "core/io/bag_log.h"
 #include "core/io/carmen_reader.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
@@ -55,13 +56,25 @@ struct Box {
   }
 };
 
+// The bag's scans posed by its ground truth.
+Result<LaserLog> ReadTruthBag(const std::string& path, const DatasetOptions& options) {
+  if (options.truth_frame.empty() == options.truth_odom.empty()) {
+    return Status::InvalidArgument(path + ": a bag needs --truth-frame FRAME or --truth-odom TOPIC (one of them): " +
+                                   "lmd-eval scores against ground-truth poses");
+  }
+  BagLogOptions bag;
+  bag.frame = options.truth_frame;
+  bag.odom_topic = options.truth_odom;
+  return ReadBagLaserLog(path, bag);
+}
+
 }  // namespace
 
 Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   Dataset d;
   d.name = DatasetName(log_path);
-  Result<LaserLog> log = ReadCarmenLog(log_path);
+  Result<LaserLog> log = IsBagPath(log_path) ? ReadTruthBag(log_path, options) : ReadCarmenLog(log_path);
   if (!log.ok()) return log.status();
   LocalMapOptions lm;
   lm.id_prefix = d.name;

@@ -54,6 +54,11 @@ struct DatasetOptions {
   // points (the served protocol: a robot cannot know whether its place was
   // revisited, so queries without a relevant map are asked too).
   bool every_map = false;
+  // A bag (MCAP, rosbag2, ROS 1) instead of a CARMEN log: its ground-truth
+  // poses come from this tf frame (e.g. "map" of a SLAM or simulator) or
+  // this nav_msgs/Odometry topic; one of the two is required.
+  std::string truth_frame;
+  std::string truth_odom;
 };
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

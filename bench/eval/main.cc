@@ -34,6 +34,8 @@ void Usage(std::FILE* out) {
                "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
                "      maps within 10 m of each excluded);\n"
                "      both (and --anchor) insert every map with its log pose as pose_hint.\n"
+               "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
+               "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
                "  export --log FILE... --out DIR\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
 }

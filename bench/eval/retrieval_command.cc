@@ -584,6 +584,8 @@ int RunRetrieval(int argc, char** argv) {
   const std::string out_dir = args.Get("out", "out/retrieval");
   RunOptions ro;
   DatasetOptions dopt;
+  dopt.truth_frame = args.Get("truth-frame");
+  dopt.truth_odom = args.Get("truth-odom");
   try {
     ro.threads = std::stoi(args.Get("threads", "2"));
     ro.max_queries = std::stoul(args.Get("max-queries", "0"));

@@ -354,6 +354,8 @@ int RunServed(int argc, char** argv) {
   ServedOptions options;
   DatasetOptions dataset;
   dataset.every_map = true;
+  dataset.truth_frame = args.Get("truth-frame");
+  dataset.truth_odom = args.Get("truth-odom");
   try {
     options.max_queries = std::stoul(args.Get("max-queries", "0"));
     options.threads = std::stoi(args.Get("threads", "1"));
