@@ -20,6 +20,7 @@
 #include "core/render/result_svg.h"
 #include "core/render/site_svg.h"
 #include "core/sim/change.h"
+#include "core/sim/odometry_drift.h"
 #include "core/sim/simulate.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -32,9 +33,8 @@ constexpr size_t kSendStep = 5;       // robot 2 sends every 5th map (1 m each)
 constexpr size_t kMaxEarlier = 4;     // earlier maps in a sequence query, at most
 constexpr double kChangeHitM = 0.5;   // a mask this close to a changed point finds it
 // Robot 2's odometry: off by up to 2 % of the distance, and its heading by
-// up to 0.5 deg per metre.
-constexpr double kScaleDrift = 0.02;
-constexpr double kHeadingDriftRadPerM = 0.5 * M_PI / 180;
+// up to 0.5 deg per metre (OdometryDrift's defaults).
+const OdometryDrift kDrift;
 
 v1::InsertMapRequest ToInsert(const std::string& collection, const LocalMap& map, uint64_t sequence) {
   v1::InsertMapRequest insert;
@@ -64,24 +64,6 @@ int StoreRobotOne(const CommandContext& ctx, const std::string& collection, cons
   }
   progress.Done();
   return 0;
-}
-
-// Robot 2's odometry from map `from` to map `to`: `from`'s own frame in
-// `to`'s, its heading and length drifted.
-Pose2 Odometry(const LocalMap& from, const LocalMap& to, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const double travel = std::abs(to.truth.travel_start - from.truth.travel_start);
-  const Pose2 truth = Compose(Inverse(to.truth.global_frame), from.truth.global_frame);
-  const double heading_error = u(rng) * kHeadingDriftRadPerM * travel;
-  const double scale = 1.0 + u(rng) * kScaleDrift;
-  // The heading error accumulates along the way: on average half of it turns the path.
-  const double c = std::cos(heading_error / 2), s = std::sin(heading_error / 2);
-  return {scale * (c * truth.x - s * truth.y), scale * (s * truth.x + c * truth.y), truth.theta + heading_error};
-}
-
-// How far off a prior carried `travel` metres by that odometry can be.
-double PriorRadius(double travel) {
-  return 0.3 + kScaleDrift * travel + travel * kHeadingDriftRadPerM * travel / 2;
 }
 
 double PoseErrorM(const Pose2& a, const Pose2& b) { return std::hypot(a.x - b.x, a.y - b.y); }
@@ -166,16 +148,19 @@ int DemoCommand(const CommandContext& ctx) {
         before -= kSendStep;
         v1::SequenceMap* earlier = request.add_sequence();
         *earlier->mutable_map() = ToProto(route[before]);
-        *earlier->mutable_in_query() = ToProto(Odometry(route[before], query, rng));
+        *earlier->mutable_in_query() = ToProto(DriftedOdometry(
+            route[before].truth.global_frame, query.truth.global_frame,
+            query.truth.travel_start - route[before].truth.travel_start, kDrift, rng));
         earlier->set_travel_m(query.truth.travel_start - route[before].truth.travel_start);
       }
       how = "lost: sequence of " + std::to_string(earlier_maps + 1) + " maps";
     } else {
       const double travel = query.truth.travel_start - fixed_at->truth.travel_start;
       v1::Prior* prior = request.mutable_prior();
-      *prior->mutable_pose() = ToProto(Compose(fix, Inverse(Odometry(*fixed_at, query, rng))));
-      prior->set_radius_m(PriorRadius(travel));
-      prior->set_heading_sigma_rad(2 * M_PI / 180 + kHeadingDriftRadPerM * travel);
+      const Pose2 odometry = DriftedOdometry(fixed_at->truth.global_frame, query.truth.global_frame, travel, kDrift, rng);
+      *prior->mutable_pose() = ToProto(Compose(fix, Inverse(odometry)));
+      prior->set_radius_m(DriftRadius(travel, kDrift));
+      prior->set_heading_sigma_rad(2 * M_PI / 180 + kDrift.heading_rad_per_m * travel);
       prior->set_fall_back_to_global(true);
       char text[64];
       std::snprintf(text, sizeof text, "prior, %.0f m since the last fix, radius %.1f m", travel, prior->radius_m());

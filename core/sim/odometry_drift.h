@@ -1,0 +1,28 @@
+// Odometry that drifts, for simulated robots that track their pose: the
+// relative pose between two of a robot's maps as its wheels would report
+// it, and how far a pose carried by it can be off.
+#pragma once
+
+#include <random>
+
+#include "core/types.h"
+
+namespace lmd {
+
+struct OdometryDrift {
+  double scale = 0.02;                               // length off by up to this share
+  double heading_rad_per_m = 0.5 * 3.14159265358979 / 180;  // heading off by up to this per metre
+};
+
+// `from`'s own frame in `to`'s own frame (the truth, from their frames in a
+// common one), its length and heading drifted over `travel_m`; the heading
+// error builds up along the way, so on average half of it turns the path.
+Pose2 DriftedOdometry(const Pose2& from_frame, const Pose2& to_frame, double travel_m, const OdometryDrift& drift,
+                      std::mt19937_64& rng);
+
+// Position uncertainty (m) of a pose carried `travel_m` by such odometry
+// from an exact fix: a floor of 0.3 m, the length error, and the heading
+// error's sweep.
+double DriftRadius(double travel_m, const OdometryDrift& drift);
+
+}  // namespace lmd
