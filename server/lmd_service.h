@@ -87,6 +87,8 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   // `context` is (checked between scan matches).
   Result<Query> RunQuery(const QueryRequest& request, grpc::CallbackServerContext* context) const;
   // The default method's answer to `request` (prior, sequence or global).
+  // True when `map_id`'s anchor was given (a pose_hint), not derived by lmdd.
+  bool AnchorIsGiven(const std::string& collection, const std::string& map_id) const;
   Result<Localization> Localise(const QueryRequest& request, const LocalQuery& query, const LocalizeOptions& options,
                                 grpc::CallbackServerContext* context) const;
   // The wire form of a hit: of the default method, and of a paper method

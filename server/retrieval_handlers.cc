@@ -79,6 +79,11 @@ LmdServiceImpl::QueryRequest LmdServiceImpl::QueryOf(const Request& request, boo
   return q;
 }
 
+bool LmdServiceImpl::AnchorIsGiven(const std::string& collection, const std::string& map_id) const {
+  Result<v1::MapMetadata> meta = store_->GetMetadata(collection, map_id);
+  return meta.ok() && meta->has_anchor() && !meta->anchor().derived();
+}
+
 Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const LocalQuery& query,
                                               const LocalizeOptions& options,
                                               grpc::CallbackServerContext* context) const {
@@ -184,9 +189,13 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       Result<IndexedEntry> entry = store_->Indexed(collection, hit.map_id);
       query.hit_ids.push_back(entry.ok() ? entry->map_id : std::string());  // empty: deleted meanwhile
     }
-    // A sure answer against an anchored map anchors this map if it is stored next.
+    // A sure answer against a map anchored by a given pose anchors this map
+    // if it is stored next. Not against a derived anchor: one wrong sure
+    // answer would otherwise anchor a robot's every later map on its own
+    // wrong ones (measured: lmd-bench load --mode fleet, robots locked 13-24 m off).
     const Localization& l = query.localization;
-    if (l.verdict.sure && !l.hits.empty() && l.hits[0].collection_pose && !query.hit_ids[0].empty()) {
+    if (l.verdict.sure && !l.hits.empty() && l.hits[0].collection_pose && !query.hit_ids[0].empty() &&
+        AnchorIsGiven(collection, query.hit_ids[0])) {
       v1::MapAnchor fix;
       *fix.mutable_pose() = ToProto(*l.hits[0].collection_pose);
       fix.set_derived(true);

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <mutex>
 #include <string>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -16,6 +17,8 @@
 #include "core/eval/ground_truth.h"
 #include "core/io/carmen_reader.h"
 #include "core/localmap/local_map_builder.h"
+#include "core/localmap/pose_ops.h"
+#include "core/sim/odometry_drift.h"
 #include "core/sim/simulate.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -34,6 +37,7 @@ struct LoadOptions {
   bool json = false;
   bool seed = true;
   std::string log;  // a CARMEN log instead of the simulated world
+  bool fleet = false;  // --mode fleet: robots track with priors (else every query is global)
 };
 
 bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
@@ -51,6 +55,11 @@ bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
     else if (flag == "--collection") options->collection = value;
     else if (flag == "--token") options->token = value;
     else if (flag == "--log") options->log = value;
+    else if (flag == "--mode" && (value == "fleet" || value == "global")) options->fleet = value == "fleet";
+    else if (flag == "--mode") {
+      std::fprintf(stderr, "lmd-bench load: --mode is global or fleet, got '%s'\n", value.c_str());
+      return false;
+    }
     else if (flag == "--robots") options->robots = static_cast<int>(std::strtol(value.c_str(), &end, 10));
     else if (flag == "--first-robot") options->first_robot = static_cast<int>(std::strtol(value.c_str(), &end, 10));
     else if (flag == "--hz") options->hz = std::strtod(value.c_str(), &end);
@@ -158,6 +167,86 @@ Result<World> LogWorld(const LoadOptions& options, size_t ticks) {
   return world;
 }
 
+// A robot of --mode fleet: it starts where it knows it is (a dock: its
+// first map's true pose) and tracks with priors from its last fix and its
+// drifting odometry (a failed prior answered globally in the same call);
+// after an answer lmdd is not sure of, or one without a pose in the site
+// frame, it is lost and asks with a sequence (its maps 3 and 6 ticks back)
+// until lmdd is sure again.
+struct FleetRobot {
+  std::mt19937_64 rng;
+  bool lost = false;
+  Pose2 fix;          // its last sure pose in the site frame
+  size_t fixed_at = 0;  // ... the tick of that map
+  // Outcomes, over its answered DetectChanges.
+  size_t asked = 0, right = 0, sure = 0, sure_wrong = 0, sure_unposed = 0, by_prior = 0, by_sequence = 0,
+         fell_back = 0;
+};
+
+constexpr size_t kSequenceStepTicks = 3;
+
+void AskAsTracked(const std::vector<LocalMap>& maps, size_t t, FleetRobot* robot, v1::DetectChangesRequest* request) {
+  const OdometryDrift drift;
+  const LocalMap& now = maps[t];
+  if (!robot->lost) {
+    const LocalMap& then = maps[robot->fixed_at];
+    const double travel = now.truth.travel_start - then.truth.travel_start;
+    const Pose2 odometry = DriftedOdometry(then.truth.global_frame, now.truth.global_frame, travel, drift, robot->rng);
+    v1::Prior* prior = request->mutable_prior();
+    *prior->mutable_pose() = ToProto(Compose(robot->fix, Inverse(odometry)));
+    prior->set_radius_m(DriftRadius(travel, drift));
+    prior->set_heading_sigma_rad(2 * M_PI / 180 + drift.heading_rad_per_m * std::abs(travel));
+    prior->set_fall_back_to_global(true);
+    return;
+  }
+  for (size_t k = 1; k <= 2 && t >= k * kSequenceStepTicks; ++k) {
+    const LocalMap& before = maps[t - k * kSequenceStepTicks];
+    const double travel = now.truth.travel_start - before.truth.travel_start;
+    v1::SequenceMap* earlier = request->add_sequence();
+    *earlier->mutable_map() = ToProto(before);
+    *earlier->mutable_in_query() =
+        ToProto(DriftedOdometry(before.truth.global_frame, now.truth.global_frame, travel, drift, robot->rng));
+    earlier->set_travel_m(std::abs(travel));
+  }
+}
+
+// Scores the answer against the truth (the site frame is the world's) and
+// updates the robot's state.
+void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& response, FleetRobot* robot) {
+  const v1::Localization& verdict = response.localization();
+  ++robot->asked;
+  robot->by_prior += verdict.prior_used() && !verdict.fell_back_to_global();
+  robot->fell_back += verdict.fell_back_to_global();
+  robot->by_sequence += verdict.sequence_maps() > 0;
+  const bool posed = response.hits_size() > 0 && response.hits(0).hit().has_collection_pose();
+  const Pose2 got = posed ? FromProto(response.hits(0).hit().collection_pose()) : Pose2{};
+  const Pose2& truth = map.truth.global_frame;
+  const bool right = posed && std::hypot(got.x - truth.x, got.y - truth.y) <= 0.2 &&
+                     std::abs(std::remainder(got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
+  robot->right += right;
+  robot->sure += verdict.localized();
+  robot->sure_wrong += verdict.localized() && posed && !right;
+  robot->sure_unposed += verdict.localized() && !posed;  // its top hit's map is not anchored
+  robot->lost = !(verdict.localized() && posed);
+  if (!robot->lost) robot->fix = got, robot->fixed_at = t;
+}
+
+void PrintFleet(const std::vector<FleetRobot>& fleet) {
+  FleetRobot all;
+  for (const FleetRobot& r : fleet) {
+    all.asked += r.asked, all.right += r.right, all.sure += r.sure, all.sure_wrong += r.sure_wrong;
+    all.sure_unposed += r.sure_unposed;
+    all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.fell_back += r.fell_back;
+  }
+  const double n = std::max<double>(1.0, static_cast<double>(all.asked));
+  std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg), sure %zu (%.3f), "
+              "sure and wrong %zu, sure without a site pose %zu; by prior %zu, prior failed and answered globally %zu, "
+              "by sequence %zu, global %zu\n",
+              all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.sure_unposed,
+              all.by_prior, all.fell_back,
+              all.by_sequence, all.asked - all.by_prior - all.fell_back - all.by_sequence);
+}
+
 }  // namespace
 
 int RunLoadBench(int argc, char** argv) {
@@ -187,7 +276,10 @@ int RunLoadBench(int argc, char** argv) {
     for (size_t i = 0; i < base.size(); i += 25) {
       v1::InsertMapsRequest request;
       for (size_t k = i; k < std::min(base.size(), i + 25); ++k) {
-        *request.add_maps() = ToInsert(options.collection, "seed", k, base[k]);
+        // The seeded run is a site map: anchored by its (true) poses.
+        v1::InsertMapRequest* insert = request.add_maps();
+        *insert = ToInsert(options.collection, "seed", k, base[k]);
+        *insert->mutable_metadata()->mutable_pose_hint() = ToProto(base[k].truth.global_frame);
       }
       v1::InsertMapsResponse response;
       const grpc::Status status = (*client)->InsertMaps(request, &response);
@@ -218,6 +310,11 @@ int RunLoadBench(int argc, char** argv) {
   for (int r = 0; r < options.robots; ++r) top_hits[r].resize(plans[r].size());
   const auto start = std::chrono::steady_clock::now();
   const auto period = std::chrono::duration<double>(1.0 / options.hz);
+  std::vector<FleetRobot> fleet(options.robots);
+  for (int r = 0; r < options.robots; ++r) {
+    fleet[r].rng.seed(0x5EED0000ULL + static_cast<uint64_t>(options.first_robot + r));
+    if (!robot_maps[r].empty()) fleet[r].fix = robot_maps[r][0].truth.global_frame;
+  }
   std::vector<std::thread> robots;
   for (int r = 0; r < options.robots; ++r) {
     robots.emplace_back([&, r] {
@@ -238,12 +335,15 @@ int RunLoadBench(int argc, char** argv) {
             if (errors++ == 0) first_error = status.error_message();
           }
         };
-        timed([&] {
+        auto insert = [&] {
           v1::InsertMapsRequest request;
           *request.add_maps() = map;
           v1::InsertMapsResponse response;
           return (*client)->InsertMaps(request, &response);
-        });
+        };
+        // Fleet robots ask first and store after: a sure answer then anchors
+        // the map they store (lmdd derives it).
+        if (!options.fleet) timed(insert);
         timed([&] {
           v1::DetectChangesRequest request;
           request.set_collection(options.collection);
@@ -251,13 +351,16 @@ int RunLoadBench(int argc, char** argv) {
           request.set_top_k(5);
           // The robot asks about stored maps other than the one it just sent.
           request.add_exclude_map_ids(map.metadata().map_id());
+          if (options.fleet) AskAsTracked(robot_maps[r], t, &fleet[r], &request);
           v1::DetectChangesResponse response;
           const grpc::Status status = (*client)->DetectChanges(request, &response);
           if (status.ok() && response.hits_size() > 0) top_hits[r][t] = response.hits(0).hit().map_id();
+          if (status.ok() && options.fleet) Track(robot_maps[r][t], t, response, &fleet[r]);
           detects_ok += status.ok();
           reduced += status.ok() && response.reduced_depth();
           return status;
         });
+        if (options.fleet) timed(insert);
       }
     });
   }
@@ -291,6 +394,7 @@ int RunLoadBench(int argc, char** argv) {
       detects_ok > 0 ? static_cast<double>(reduced.load()) / static_cast<double>(detects_ok.load()) : 0.0;
   std::printf("lmdd was busy and answered %ld of %ld DetectChanges at its reduced depth (%.3f)\n", reduced.load(),
               detects_ok.load(), reduced_share);
+  if (options.fleet) PrintFleet(fleet);
   if (options.json) {
     std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld, "
                 "\"place_at_1\": %.4f, \"reduced_depth\": %.4f}\n",

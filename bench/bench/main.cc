@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
                 "  load --server HOST:PORT --collection C --robots R --hz H --seconds S [--json]\n"
                 "       [--no-seed] [--first-robot N]      simulated robots inserting and detecting changes\n"
                 "       [--log CARMEN_LOG]                 (--log: robots driving a real log's maps again)\n"
+                "       [--mode fleet]                     robots tracking with priors from drifting odometry\n"
                 "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
                 "                                          store N simulated maps (scale runs)\n"
                 "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n");

@@ -169,6 +169,21 @@ TEST_F(AnchoredQueryTest, ASureAnswerAnchorsTheMapInsertedNext) {
   EXPECT_GT(meta.anchor().confidence(), 0.5);
   EXPECT_LT(Distance(meta.anchor().pose(), map.truth.global_frame), 0.1);
 
+  // A sure answer against that derived anchor does not anchor the next map:
+  // an error would otherwise carry on from map to map.
+  const LocalMap& next = DemoMaps()[47];
+  detect.clear_exclude_map_ids();
+  for (size_t i = 0; i < kStored; i += kStride) detect.add_exclude_map_ids(DemoMaps()[i].id);  // all but "new"
+  *detect.mutable_map() = ToProto(next);
+  ASSERT_TRUE(server_->client().DetectChanges(detect, &detected).ok());
+  ASSERT_GT(detected.hits_size(), 0);
+  EXPECT_EQ(detected.hits(0).hit().map_id(), "new");
+  ASSERT_TRUE(detected.localization().localized());
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("site", "next", ToProto(next)), &inserted).ok());
+  get.set_map_id("next");
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  EXPECT_FALSE(got.map().metadata().has_anchor());
+
   // A map no query localised is stored without an anchor.
   ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("site", "plain", ToProto(DemoMaps()[200])), &inserted).ok());
   get.set_map_id("plain");
