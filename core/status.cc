@@ -17,6 +17,7 @@ const char* CodeName(Status::Code code) {
     case Status::Code::kPermissionDenied: return "PERMISSION_DENIED";
     case Status::Code::kCancelled: return "CANCELLED";
     case Status::Code::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
+    case Status::Code::kFailedPrecondition: return "FAILED_PRECONDITION";
   }
   return "UNKNOWN";
 }

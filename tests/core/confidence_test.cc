@@ -136,7 +136,7 @@ TEST(ConfidenceTest, MapsWithoutFreeSpaceNeverDisagree) {
 // --- Judge ------------------------------------------------------------------
 
 TEST(JudgeTest, ALoneStrongHitIsSure) {
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict v = Judge(&hits);
   EXPECT_TRUE(v.sure);
   EXPECT_DOUBLE_EQ(v.best_score, 0.9);
@@ -154,22 +154,22 @@ TEST(JudgeTest, NoHitsIsNeverSure) {
   EXPECT_FALSE(v.sure);
   EXPECT_EQ(v.best_score, 0.0);
   EXPECT_EQ(v.confidence, 0.0);
-  std::vector<JudgedHit> unmapped = {{0.9, kQueryPose, nullptr, false}};
+  std::vector<JudgedHit> unmapped = {{0.9, kQueryPose, nullptr, false, std::nullopt}};
   EXPECT_FALSE(Judge(&unmapped).sure);
 }
 
 TEST(JudgeTest, BelowMinScoreIsNeverSure) {
   for (double score : {0.0, 0.3, 0.59}) {
-    std::vector<JudgedHit> hits = {{score, kQueryPose, &TheMaps().room, false}};
+    std::vector<JudgedHit> hits = {{score, kQueryPose, &TheMaps().room, false, std::nullopt}};
     const Verdict v = Judge(&hits);
     EXPECT_FALSE(v.sure) << score;  // the margin (the whole score, no rival) is not enough
     EXPECT_DOUBLE_EQ(v.best_score, score);
   }
-  std::vector<JudgedHit> at = {{0.6, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> at = {{0.6, kQueryPose, &TheMaps().room, false, std::nullopt}};
   EXPECT_TRUE(Judge(&at).sure);  // min_score itself is enough
   ConfidenceOptions strict;
   strict.min_score = 0.95;
-  std::vector<JudgedHit> strong = {{0.9, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> strong = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   EXPECT_FALSE(Judge(&strong, strict).sure);
 }
 
@@ -177,7 +177,7 @@ TEST(JudgeTest, ADisagreeingHitWithinTheMarginIsARival) {
   const Maps& m = TheMaps();
   ASSERT_GT(Disagreement(m.room, m.partitioned, Pose2{}), ConfidenceOptions{}.max_disagreement);
   // The query fits both rooms at the same pose: the partition would cross the room's free space.
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.8, kQueryPose, &m.partitioned, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.8, kQueryPose, &m.partitioned, false, std::nullopt}};
   const Verdict v = Judge(&hits);
   EXPECT_FALSE(v.sure);
   EXPECT_DOUBLE_EQ(v.best_score, 0.9);
@@ -190,13 +190,13 @@ TEST(JudgeTest, ADisagreeingHitWithinTheMarginIsARival) {
 
 TEST(JudgeTest, ADisagreeingHitBeyondTheMarginLeavesItSure) {
   const Maps& m = TheMaps();
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.65, kQueryPose, &m.partitioned, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.65, kQueryPose, &m.partitioned, false, std::nullopt}};
   const Verdict v = Judge(&hits);
   EXPECT_TRUE(v.sure);  // margin 0.25 >= 0.2
   EXPECT_DOUBLE_EQ(v.rival_score, 0.65);
   EXPECT_FALSE(hits[1].agrees_with_best);
   // The best rival counts: one more within the margin overturns it.
-  hits.push_back({0.85, kQueryPose, &m.partitioned, false});
+  hits.push_back({0.85, kQueryPose, &m.partitioned, false, std::nullopt});
   const Verdict w = Judge(&hits);
   EXPECT_FALSE(w.sure);
   EXPECT_DOUBLE_EQ(w.rival_score, 0.85);
@@ -208,15 +208,15 @@ TEST(JudgeTest, ADisagreeingHitBeyondTheMarginLeavesItSure) {
 TEST(JudgeTest, AnAgreeingHitCountsAndIsNoRival) {
   const Maps& m = TheMaps();
   const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);  // the query's pose in the copy
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.89, in_copy, &m.copy, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.89, in_copy, &m.copy, false, std::nullopt}};
   const Verdict v = Judge(&hits);
   EXPECT_TRUE(v.sure);
   EXPECT_EQ(v.agreeing, 1u);
   EXPECT_EQ(v.rival_score, 0.0);
   EXPECT_TRUE(hits[1].agrees_with_best);
   // The same map at a pose 3 m off puts its walls through the room: a rival.
-  std::vector<JudgedHit> shifted = {{0.9, kQueryPose, &m.room, false},
-                                    {0.89, Compose(in_copy, {0.0, -3.0, 0.0}), &m.copy, false}};
+  std::vector<JudgedHit> shifted = {{0.9, kQueryPose, &m.room, false, std::nullopt},
+                                    {0.89, Compose(in_copy, {0.0, -3.0, 0.0}), &m.copy, false, std::nullopt}};
   const Verdict w = Judge(&shifted);
   EXPECT_FALSE(w.sure);
   EXPECT_EQ(w.agreeing, 0u);
@@ -225,7 +225,7 @@ TEST(JudgeTest, AnAgreeingHitCountsAndIsNoRival) {
 }
 
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict close = Judge(&hits, {}, 0.75);
   EXPECT_FALSE(close.sure);
   EXPECT_DOUBLE_EQ(close.rival_score, 0.75);
@@ -233,14 +233,14 @@ TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   EXPECT_TRUE(far.sure);
   EXPECT_DOUBLE_EQ(far.rival_score, 0.65);
   // The larger of the self rival and the disagreeing hits is the rival.
-  std::vector<JudgedHit> two = {{0.9, kQueryPose, &TheMaps().room, false},
-                                {0.8, kQueryPose, &TheMaps().partitioned, false}};
+  std::vector<JudgedHit> two = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt},
+                                {0.8, kQueryPose, &TheMaps().partitioned, false, std::nullopt}};
   EXPECT_DOUBLE_EQ(Judge(&two, {}, 0.5).rival_score, 0.8);
   EXPECT_DOUBLE_EQ(Judge(&two, {}, 0.85).rival_score, 0.85);
 }
 
 TEST(JudgeTest, ConfidenceGrowsWithTheMarginAndTheScore) {
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   double previous = 0.0;
   for (double rival : {0.89, 0.85, 0.75, 0.7, 0.6, 0.4, 0.0}) {
     const Verdict v = Judge(&hits, {}, rival);
@@ -250,7 +250,7 @@ TEST(JudgeTest, ConfidenceGrowsWithTheMarginAndTheScore) {
   }
   previous = 0.0;
   for (double best : {0.5, 0.6, 0.7, 0.8, 0.9, 1.0}) {  // the same margin 0.1
-    std::vector<JudgedHit> one = {{best, kQueryPose, &TheMaps().room, false}};
+    std::vector<JudgedHit> one = {{best, kQueryPose, &TheMaps().room, false, std::nullopt}};
     const Verdict v = Judge(&one, {}, best - 0.1);
     EXPECT_GT(v.confidence, previous) << best;
     previous = v.confidence;
@@ -260,7 +260,7 @@ TEST(JudgeTest, ConfidenceGrowsWithTheMarginAndTheScore) {
 // Scores exact in binary (0.75 - 0.5 is 0.25 exactly), so that the margin
 // can sit on the threshold.
 TEST(JudgeTest, TheMarginAndScoreThresholdsAreTheOptions) {
-  std::vector<JudgedHit> hits = {{0.75, kQueryPose, &TheMaps().room, false}};
+  std::vector<JudgedHit> hits = {{0.75, kQueryPose, &TheMaps().room, false, std::nullopt}};
   ConfidenceOptions options;
   options.min_margin = 0.25;
   EXPECT_TRUE(Judge(&hits, options, 0.5).sure);  // margin >= min_margin
@@ -280,9 +280,9 @@ TEST(JudgeTest, TheMarginAndScoreThresholdsAreTheOptions) {
 TEST(JudgeTest, HitsBelowTheAgreementWindowAreNotCompared) {
   const Maps& m = TheMaps();
   const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false},
-                                 {0.55, kQueryPose, &m.partitioned, false},
-                                 {0.55, in_copy, &m.copy, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt},
+                                 {0.55, kQueryPose, &m.partitioned, false, std::nullopt},
+                                 {0.55, in_copy, &m.copy, false, std::nullopt}};
   ConfidenceOptions tight;
   tight.min_margin = 0.5;  // a rival at 0.55 would now overturn the verdict
   const Verdict v = Judge(&hits, tight);
@@ -306,7 +306,7 @@ TEST(JudgeTest, HitsBelowTheAgreementWindowAreNotCompared) {
 TEST(JudgeTest, EveryHitsAgreementIsSetEvenWhenNotCompared) {
   const Maps& m = TheMaps();
   const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
-  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false}, {0.85, in_copy, &m.copy, false}};
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.85, in_copy, &m.copy, false, std::nullopt}};
   Judge(&hits);
   ASSERT_TRUE(hits[1].agrees_with_best);
   hits[1].score = 0.4;  // rescored far below the best: no longer a place hit
