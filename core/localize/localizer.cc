@@ -130,29 +130,6 @@ void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits
   }
 }
 
-}  // namespace localize_internal
-
-using namespace localize_internal;
-
-PreparedPlace PreparePlace(const LocalMap& map, const LocalizeOptions& options) {
-  PreparedPlace p;
-  p.map = std::make_shared<const PreparedMap>(PrepareMap(map, options.match.map));
-  p.features = DescribePlace(p.map->points, p.map->heading, options.features);
-  return p;
-}
-
-LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const PreparedPlace* prepared) {
-  LocalQuery q;
-  PreparedPlace place = prepared ? *prepared : PreparePlace(map, options);
-  q.map = std::move(place.map);
-  q.features = std::move(place.features);
-  q.match = PrepareQuery(map, options.match, q.map->heading);
-  q.source = std::move(map);
-  return q;
-}
-
-namespace localize_internal {
-
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options) {
   std::vector<Candidate> candidates;
@@ -197,6 +174,25 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
 
 }  // namespace localize_internal
 
+using namespace localize_internal;
+
+PreparedPlace PreparePlace(const LocalMap& map, const LocalizeOptions& options) {
+  PreparedPlace p;
+  p.map = std::make_shared<const PreparedMap>(PrepareMap(map, options.match.map));
+  p.features = DescribePlace(p.map->points, p.map->heading, options.features);
+  return p;
+}
+
+LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const PreparedPlace* prepared) {
+  LocalQuery q;
+  PreparedPlace place = prepared ? *prepared : PreparePlace(map, options);
+  q.map = std::move(place.map);
+  q.features = std::move(place.features);
+  q.match = PrepareQuery(map, options.match, q.map->heading);
+  q.source = std::move(map);
+  return q;
+}
+
 Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                       const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
                       bool with_changes) {
@@ -212,7 +208,6 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
     };
   }
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
-  SetCollectionPoses(source, &out.hits);  // the refined best's
   return out;
 }
 

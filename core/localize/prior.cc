@@ -25,7 +25,7 @@ constexpr double kStageSlackM = 0.5;      // m, added to the scan match window a
 // search's own bound at its coarsest level), each with the pose the prior
 // implies in it. *match: the window that covers the prior.
 std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
-                                         const Prior& prior, std::vector<MapSource::Anchored> near,
+                                         const Prior& prior, const std::vector<MapSource::Anchored>& near,
                                          ScanMatchOptions* match) {
   std::vector<Point2> path;
   for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
@@ -97,7 +97,6 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
                           const std::function<bool()>& stop, bool with_changes) {
   Localization out;
-  out.verdict.prior_used = true;
   // Where the query's points can lie in the collection's frame.
   double reach = 0.0;
   for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
@@ -158,23 +157,25 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window (at its heading:
   // another turn would be outside the prior's).
-  auto second_pose = [&](const LocalizedHit& best) {
-    ScanMatchOptions excluding = options.match;
-    excluding.window_m = max_off_m;
-    excluding.correlative.exclude_centroid = TransformPoint(best.pose, query.match.centroid);
-    excluding.correlative.exclude_theta = best.pose.theta;
-    excluding.correlative.exclude_radius_m = options.self_rival_radius_m;
-    excluding.correlative.exclude_angle_rad = options.self_rival_angle_deg * M_PI / 180;
-    const ScanMatch second = MatchLocalMaps(query.match, *best.db, {best.pose}, excluding);
-    const Point2 p = TransformPoint(second.pose, query.match.centroid);
-    const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
-                                 p.y - excluding.correlative.exclude_centroid.y) <= options.self_rival_radius_m;
-    return back ? 0.0 : Scored(query, *best.db, second, options).score;
-  };
+  std::function<double(const LocalizedHit&)> second_pose;
+  if (options.self_rival_radius_m > 0) {
+    second_pose = [&](const LocalizedHit& best) {
+      ScanMatchOptions excluding = options.match;
+      excluding.window_m = max_off_m;
+      excluding.correlative.exclude_centroid = TransformPoint(best.pose, query.match.centroid);
+      excluding.correlative.exclude_theta = best.pose.theta;
+      excluding.correlative.exclude_radius_m = options.self_rival_radius_m;
+      excluding.correlative.exclude_angle_rad = options.self_rival_angle_deg * M_PI / 180;
+      const ScanMatch second = MatchLocalMaps(query.match, *best.db, {best.pose}, excluding);
+      const Point2 p = TransformPoint(second.pose, query.match.centroid);
+      const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
+                                   p.y - excluding.correlative.exclude_centroid.y) <= options.self_rival_radius_m;
+      return back ? 0.0 : Scored(query, *best.db, second, options).score;
+    };
+  }
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;
-  SetCollectionPoses(source, &out.hits);
   return out;
 }
 

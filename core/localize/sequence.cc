@@ -125,7 +125,6 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   Conclude(newest, judged, std::move(hits), nullptr, with_changes, &out);
   out.verdict.sequence_maps = earlier.size();
   if (!out.hits.empty()) out.verdict.sequence_agreeing = out.hits[0].sequence_agreeing;
-  SetCollectionPoses(source, &out.hits);
   return out;
 }
 

@@ -243,10 +243,6 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
     int turn;
   };
   std::vector<Pair> pairs;
-  // Rarest features first (fewest stored features in their buckets, over
-  // the four turns): they are the cheapest to look up and, like rare words
-  // in a text index, the most telling; a bound on the work then drops the
-  // common ones, which cost most and tell least.
   std::vector<char> allowed;  // by slot, when options.only is set
   if (options.only != nullptr) {
     allowed.assign(slot_id_.size(), 0);
@@ -255,6 +251,10 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
       if (it != id_to_slot_.end()) allowed[it->second] = 1;
     }
   }
+  // Rarest features first (fewest stored features in their buckets, over
+  // the four turns): they are the cheapest to look up and, like rare words
+  // in a text index, the most telling; a bound on the work then drops the
+  // common ones, which cost most and tell least.
   const size_t n_query = query.features.size();
   constexpr size_t kBucketsPerFeature = 4 * kTables;  // every turn in every table
   std::vector<uint32_t> bucket_of(n_query * kBucketsPerFeature);  // kept for the search below

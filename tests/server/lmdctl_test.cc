@@ -243,7 +243,6 @@ TEST_F(LmdctlTest, TheDemoRelocalisesRobotTwoAndIsNeverSureAndWrong) {
   EXPECT_GT(sent, 10);
   EXPECT_GT(sure, 0);
   EXPECT_EQ(sure_wrong, 0) << demo.out;
-  EXPECT_GE(right, sure);
   // After the first sure fix robot 2 tracks with priors: no map after it is lost again.
   const size_t first_prior = demo.out.find(" prior, ");
   ASSERT_NE(first_prior, std::string::npos) << demo.out;
