@@ -27,6 +27,7 @@ void DescriptorCache::Put(const Key& key, std::shared_ptr<const DescribedMap> de
   if (capacity_ == 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
   if (const auto it = index_.find(key); it != index_.end()) {
+    if (described->lmd && !it->second->second->lmd) it->second->second = std::move(described);
     entries_.splice(entries_.begin(), entries_, it->second);
     return;
   }

@@ -31,6 +31,7 @@ class DescriptorCache {
 
   // Null when absent.
   std::shared_ptr<const DescribedMap> Find(const Key& key);
+  // Of two entries for one key, keeps the one with the paper's descriptor.
   void Put(const Key& key, std::shared_ptr<const DescribedMap> described);
 
  private:

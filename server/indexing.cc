@@ -10,9 +10,12 @@ Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config) {
   return Describe(map, PlanViewpoint(map, config.viewpoint), config.describer);
 }
 
-DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config) {
+DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config, bool with_lmd) {
   const LocalMap view = MethodView(map);
-  return {DescribeForIndex(view, config), PreparePlace(view, config.localize)};
+  DescribedMap described;
+  if (with_lmd) described.lmd = DescribeForIndex(view, config);
+  described.place = PreparePlace(view, config.localize);
+  return described;
 }
 
 LocalMap MethodView(LocalMap map) {

@@ -8,6 +8,7 @@
 // the store opens.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "core/describe/describer.h"
@@ -33,14 +34,17 @@ IndexingConfig ProductIndexing(bool inner_words);
 // The planned frame and descriptor of `map` (in its own frame).
 Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config);
 
-// Everything lmdd computes from a map's content: the paper's descriptor and
-// the default method's preparation (scan-matching grids, place features).
+// Everything lmdd computes from a map's content: the default method's
+// preparation (scan-matching grids, place features) and the paper's
+// descriptor. A query of the default method needs no descriptor: it is
+// computed for maps stored (the paper's methods query them) and queries of
+// the paper's methods only.
 struct DescribedMap {
-  Lmd lmd;
+  std::optional<Lmd> lmd;
   PreparedPlace place;
 };
-// Both, of `map` as the method sees it (MethodView).
-DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config);
+// Both (the descriptor only `with_lmd`) of `map` as the method sees it (MethodView).
+DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config, bool with_lmd);
 
 // `map` as lmdd's method sees it: its points deduplicated on the local-map
 // grid (0.1 m), as lmd builds its own maps. A client's raw, dense or repeated

@@ -58,12 +58,20 @@ LmdServiceImpl::LmdServiceImpl(const ServerConfig& config, MapStore* store, Call
       prepared_(size_t{config.prepared_map_cache_mb} << 20),
       fixes_(kRecentFixes) {}
 
-std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap& map,
+std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap& map, bool with_lmd,
                                                              DescriptorCache::Key* key_out) const {
   const DescriptorCache::Key key = DescriptorCache::KeyOf(map.SerializeAsString());
   if (key_out != nullptr) *key_out = key;
-  if (std::shared_ptr<const DescribedMap> cached = cache_.Find(key)) return cached;
-  auto described = std::make_shared<const DescribedMap>(DescribeMap(FromProto(map), store_->indexing()));
+  std::shared_ptr<const DescribedMap> cached = cache_.Find(key);
+  if (cached && (cached->lmd || !with_lmd)) return cached;
+  std::shared_ptr<const DescribedMap> described;
+  if (cached) {  // queried a moment ago, now stored: the descriptor is what is missing
+    DescribedMap completed = *cached;
+    completed.lmd = DescribeForIndex(MethodView(FromProto(map)), store_->indexing());
+    described = std::make_shared<const DescribedMap>(std::move(completed));
+  } else {
+    described = std::make_shared<const DescribedMap>(DescribeMap(FromProto(map), store_->indexing(), with_lmd));
+  }
   cache_.Put(key, described);
   return described;
 }
@@ -86,7 +94,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
     DescriptorCache::Key key;
-    described.push_back(Describe(request->map(), &key));
+    described.push_back(Describe(request->map(), /*with_lmd=*/true, &key));
     // The anchor (output only): the robot's pose hint, or where lmdd has
     // just localised this very map against the collection's anchored maps.
     v1::MapMetadata* meta = write.map.mutable_metadata();
@@ -96,7 +104,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     } else if (std::optional<v1::MapAnchor> fix = fixes_.Find(meta->collection(), key)) {
       *meta->mutable_anchor() = *fix;
     }
-    write.lmd = described.back()->lmd;
+    write.lmd = *described.back()->lmd;
     write.place = described.back()->place.features;
     maps.push_back(std::move(write));
   }

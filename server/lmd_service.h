@@ -54,10 +54,11 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const ServerConfig& config() const { return config_; }
 
  private:
-  // What lmdd computes from `map` (the paper's descriptor, the default
-  // method's preparation), from the cache when the same map was seen
-  // recently; `key` (if not null) receives its content key.
-  std::shared_ptr<const DescribedMap> Describe(const v1::LocalMap& map, DescriptorCache::Key* key = nullptr) const;
+  // What lmdd computes from `map` (the default method's preparation, and
+  // the paper's descriptor when `with_lmd`), from the cache when the same map
+  // was seen recently; `key` (if not null) receives its content key.
+  std::shared_ptr<const DescribedMap> Describe(const v1::LocalMap& map, bool with_lmd,
+                                               DescriptorCache::Key* key = nullptr) const;
 
   // A query: validated, described, and answered against its collection.
   struct Query {

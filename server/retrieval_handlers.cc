@@ -114,7 +114,7 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
     std::vector<SequenceStep> steps;
     for (const v1::SequenceMap& wire : *request.sequence) {
       SequenceStep step;
-      step.query = PrepareLocalQuery(MethodView(FromProto(wire.map())), options, &Describe(wire.map())->place);
+      step.query = PrepareLocalQuery(MethodView(FromProto(wire.map())), options, &Describe(wire.map(), /*with_lmd=*/false)->place);
       step.in_newest = FromProto(wire.in_query());
       step.travel_m = wire.travel_m();
       steps.push_back(std::move(step));
@@ -163,7 +163,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
 
   Query query;
   DescriptorCache::Key key;
-  query.described = Describe(*request.map, &key);
+  query.described = Describe(*request.map, /*with_lmd=*/!default_method, &key);
   const size_t wanted = request.top_k == 0 ? kDefaultTopK : request.top_k;
   if (default_method) {
     LocalizeOptions options = store_->indexing().localize;
@@ -210,7 +210,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
   RetrieveOptions options;
   options.top_k = wanted + request.exclude->size();  // excluded maps may take places in the ranking
   options.method = *paper_method;
-  Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, query.described->lmd, options);
+  Result<std::vector<StoreHit>> hits = store_->Retrieve(collection, *query.described->lmd, options);
   if (!hits.ok()) return hits.status();
   hits->erase(std::remove_if(hits->begin(), hits->end(),
                              [&](const StoreHit& hit) { return excluded.count(hit.map_id) != 0; }),
@@ -233,7 +233,7 @@ v1::MapHit LmdServiceImpl::PaperWireHit(const std::string& collection, const Que
   if (meta.ok()) *out.mutable_metadata() = std::move(meta).value();  // absent if deleted meanwhile
   if (db != nullptr && method != v1::METHOD_BOW) {
     *out.mutable_pose() =
-        ToProto(RelativePose(query.described->lmd.frame, db->frame, hit.hit.orientation, hit.hit.offset));
+        ToProto(RelativePose(query.described->lmd->frame, db->frame, hit.hit.orientation, hit.hit.offset));
   }
   return out;
 }
@@ -347,7 +347,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     }
     ChangeDetectorOptions options;
     if (request->threshold() > 0) options.threshold = request->threshold();
-    Result<std::vector<ChangeMask>> masks = lmd::DetectChanges(query->described->lmd, candidates, options);
+    Result<std::vector<ChangeMask>> masks = lmd::DetectChanges(*query->described->lmd, candidates, options);
     if (!masks.ok()) return masks.status();
     std::vector<v1::ChangeHit*> wire_hits;
     for (size_t i = 0; i < kept.size(); ++i) {

@@ -287,15 +287,12 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
         const std::vector<uint32_t>& bucket = buckets_[bucket_of[index * kBucketsPerFeature + turn * kTables + t]];
         ++work.lookups;
         if (max_bucket > 0 && bucket.size() > max_bucket) continue;
-        if (allowed.empty()) work.candidates += bucket.size();  // else: those of allowed maps, below
+        work.candidates += bucket.size();
         const size_t count = bucket.size();
         for (size_t b = 0; b < count; ++b) {
           if (b + kPrefetch < count) __builtin_prefetch(&codes_[bucket[b + kPrefetch]]);
           const uint32_t handle = bucket[b];
-          if (!allowed.empty()) {
-            if (!allowed[chunk_slot_[handle / kChunk]]) continue;
-            ++work.candidates;
-          }
+          if (!allowed.empty() && !allowed[chunk_slot_[handle / kChunk]]) continue;
           const PlaceCode& stored = codes_[handle];
           const int d = HammingDistance(code, stored);
           if (d > worst) continue;

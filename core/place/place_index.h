@@ -55,9 +55,11 @@ struct PlaceSearchOptions {
   double vote_temperature = 0.0;
   size_t max_hypotheses = 40;      // returned, best first
   size_t hypotheses_per_map = 2;   // distinct translations or turns per map
-  // Stored features compared per query, at most (0 = no bound): the query's
-  // features are read rarest first (fewest stored features in their
-  // buckets) and none is started once this many have been compared. The
+  // Stored features read per query, at most (0 = no bound; with `only`, the
+  // other maps' features passed over count too, as reading them is the
+  // cost): the query's features are read rarest first (fewest stored
+  // features in their buckets) and none is started once this many have been
+  // read. The
   // search's cost grows with how crowded the query's buckets are: by a place
   // seen by hundreds of maps (a fleet passing one spot every second), or by
   // codes common all over a large site. Rare codes are the telling ones in
@@ -88,7 +90,7 @@ Pose2 HypothesisPose(const PlaceHypothesis& hypothesis, double query_heading);
 struct PlaceSearchStats {
   size_t lookups = 0;        // bucket reads
   size_t features_used = 0;  // query features looked up (max_candidates may stop earlier)
-  size_t candidates = 0;  // stored features compared
+  size_t candidates = 0;  // stored features read (compared, or passed over as not among `only`)
   size_t votes = 0;
   size_t maps_voted = 0;  // maps that received a vote
 };

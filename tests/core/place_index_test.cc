@@ -381,8 +381,15 @@ TEST(PlaceIndexTest, OnlyTheNamedMapsAreSearched) {
   PlaceSearchStats some;
   const std::vector<PlaceHypothesis> hypotheses = index.Search(query, options, {}, &some);
   for (const PlaceHypothesis& h : hypotheses) EXPECT_TRUE(h.map_id == 7 || h.map_id == 140 || h.map_id == 210) << h.map_id;
-  EXPECT_LT(some.candidates, all.candidates);
+  // The other maps' features are read and passed over: they count towards
+  // the bound on reading, which then stops a restricted search as early.
+  EXPECT_EQ(some.candidates, all.candidates);
+  options.max_candidates = all.candidates / 4;
+  PlaceSearchStats bounded;
+  index.Search(query, options, {}, &bounded);
+  EXPECT_LT(bounded.features_used, some.features_used);
   const std::vector<uint64_t> itself = {70};
+  options.max_candidates = 0;
   options.only = &itself;
   const std::vector<PlaceHypothesis> found = index.Search(query, options);
   ASSERT_FALSE(found.empty());

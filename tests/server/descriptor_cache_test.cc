@@ -7,7 +7,7 @@ namespace {
 
 std::shared_ptr<const DescribedMap> WithFeatures(size_t n) {
   auto described = std::make_shared<DescribedMap>();
-  described->lmd.features.resize(n);
+  described->lmd.emplace().features.resize(n);
   return described;
 }
 
@@ -16,7 +16,7 @@ TEST(DescriptorCacheTest, FindsWhatWasPutByContent) {
   const auto key = DescriptorCache::KeyOf("map bytes 1");
   cache.Put(key, WithFeatures(7));
   ASSERT_NE(cache.Find(DescriptorCache::KeyOf("map bytes 1")), nullptr);
-  EXPECT_EQ(cache.Find(key)->lmd.features.size(), 7u);
+  EXPECT_EQ(cache.Find(key)->lmd->features.size(), 7u);
   EXPECT_EQ(cache.Find(DescriptorCache::KeyOf("map bytes 2")), nullptr);
 }
 
@@ -29,6 +29,18 @@ TEST(DescriptorCacheTest, DropsTheLeastRecentlyUsedBeyondCapacity) {
   EXPECT_NE(cache.Find(DescriptorCache::KeyOf("a")), nullptr);
   EXPECT_EQ(cache.Find(DescriptorCache::KeyOf("b")), nullptr);
   EXPECT_NE(cache.Find(DescriptorCache::KeyOf("c")), nullptr);
+}
+
+TEST(DescriptorCacheTest, AnEntryWithTheDescriptorReplacesOneWithout) {
+  DescriptorCache cache(2);
+  const auto key = DescriptorCache::KeyOf("queried, then stored");
+  cache.Put(key, std::make_shared<DescribedMap>());  // a query's: no descriptor
+  ASSERT_FALSE(cache.Find(key)->lmd);
+  cache.Put(key, WithFeatures(5));
+  ASSERT_TRUE(cache.Find(key)->lmd);
+  EXPECT_EQ(cache.Find(key)->lmd->features.size(), 5u);
+  cache.Put(key, std::make_shared<DescribedMap>());  // a later query's does not undo it
+  EXPECT_TRUE(cache.Find(key)->lmd);
 }
 
 TEST(DescriptorCacheTest, ZeroCapacityKeepsNothing) {
