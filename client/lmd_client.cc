@@ -177,6 +177,11 @@ grpc::Status LmdClient::Stats(const v1::StatsRequest& request, v1::StatsResponse
   return WithRetries(request.collection(), [&](grpc::ClientContext* c) { return stub_->Stats(c, request, response); });
 }
 
+grpc::Status LmdClient::Cluster(v1::ClusterResponse* response) const {
+  const v1::ClusterRequest request;
+  return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Cluster(c, request, response); });
+}
+
 grpc::Status LmdClient::Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const {
   // Not retried: a lost answer would make the retry fail on the directory
   // the first attempt created.

@@ -81,6 +81,8 @@ class LmdClient {
   grpc::Status ListCollections(v1::ListCollectionsResponse* response) const;
   grpc::Status Stats(const v1::StatsRequest& request, v1::StatsResponse* response) const;
   grpc::Status Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const;
+  // The cluster as the node answering sees it (enabled = false: a single node).
+  grpc::Status Cluster(v1::ClusterResponse* response) const;
 
  private:
   explicit LmdClient(const ClientOptions& options) : options_(options) {}

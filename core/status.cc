@@ -18,6 +18,7 @@ const char* CodeName(Status::Code code) {
     case Status::Code::kCancelled: return "CANCELLED";
     case Status::Code::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
     case Status::Code::kFailedPrecondition: return "FAILED_PRECONDITION";
+    case Status::Code::kUnavailable: return "UNAVAILABLE";
   }
   return "UNKNOWN";
 }

@@ -13,7 +13,7 @@ class Status {
  public:
   enum class Code {
     kOk, kInvalidArgument, kNotFound, kAlreadyExists, kCorruption, kIoError, kResourceExhausted, kInternal,
-    kUnauthenticated, kPermissionDenied, kCancelled, kDeadlineExceeded, kFailedPrecondition,
+    kUnauthenticated, kPermissionDenied, kCancelled, kDeadlineExceeded, kFailedPrecondition, kUnavailable,
   };
 
   Status() = default;
@@ -30,6 +30,9 @@ class Status {
   static Status Cancelled(std::string msg) { return Status(Code::kCancelled, std::move(msg)); }
   static Status DeadlineExceeded(std::string msg) { return Status(Code::kDeadlineExceeded, std::move(msg)); }
   static Status FailedPrecondition(std::string msg) { return Status(Code::kFailedPrecondition, std::move(msg)); }
+  // Transient: the same call may succeed when retried (a node of a cluster
+  // is down or the collection's primary is changing).
+  static Status Unavailable(std::string msg) { return Status(Code::kUnavailable, std::move(msg)); }
 
   bool ok() const { return code_ == Code::kOk; }
   Code code() const { return code_; }

@@ -10,6 +10,7 @@ packages=(
   librocksdb-dev libspdlog-dev libfmt-dev libeigen3-dev zlib1g-dev libmicrohttpd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libzstd-dev liblz4-dev libbz2-dev libsqlite3-dev
+  etcd-server etcd-client
 )
 
 missing=()

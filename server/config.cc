@@ -94,6 +94,16 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "tls_client_ca_file") { config->tls_client_ca_file = value; return Status::Ok(); }
   if (key == "tokens_file") { config->tokens_file = value; return Status::Ok(); }
   if (key == "metrics_listen") { config->metrics_listen = value; return Status::Ok(); }
+  if (key == "cluster_etcd") { config->cluster_etcd = value; return Status::Ok(); }
+  if (key == "cluster_node_id") { config->cluster_node_id = value; return Status::Ok(); }
+  if (key == "cluster_advertise") { config->cluster_advertise = value; return Status::Ok(); }
+  if (key == "cluster_zone") { config->cluster_zone = value; return Status::Ok(); }
+  if (key == "cluster_prefix") { config->cluster_prefix = value; return Status::Ok(); }
+  if (key == "cluster_token_file") { config->cluster_token_file = value; return Status::Ok(); }
+  if (key == "cluster_replication_factor") return SetUnsigned(key, value, &config->cluster_replication_factor, 1);
+  if (key == "cluster_lease_ttl_s") return SetUnsigned(key, value, &config->cluster_lease_ttl_s, 1);
+  if (key == "cluster_replicate_timeout_ms") return SetUnsigned(key, value, &config->cluster_replicate_timeout_ms, 1);
+  if (key == "cluster_log_mb") return SetUnsigned(key, value, &config->cluster_log_mb);
   if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);

@@ -109,6 +109,33 @@ struct ServerConfig {
 
   // Prometheus text metrics over HTTP at http://HOST:PORT/metrics. Empty: off.
   std::string metrics_listen;
+
+  // Replicated collections (server/cluster, deploy/README.md). Empty
+  // cluster_etcd: a single node, exactly as without these settings.
+  // etcd members' client addresses, comma-separated ("10.0.0.1:2379,...").
+  std::string cluster_etcd;
+  // This node's name in the cluster (default: its advertised address) and the
+  // address other nodes and clients reach it on (default: listen).
+  std::string cluster_node_id;
+  std::string cluster_advertise;
+  // Copies of one collection go to nodes of different zones when set.
+  std::string cluster_zone;
+  // Copies of each collection (the primary included), when nodes allow.
+  uint32_t cluster_replication_factor = 3;
+  // The node's etcd lease, s: a node silent this long loses its primaries to
+  // in-sync copies. etcd grants at least 2 s with its default flags.
+  uint32_t cluster_lease_ttl_s = 2;
+  // How long a primary waits for a copy to confirm a write, ms, before it
+  // takes that copy out of the in-sync set (it then catches up).
+  uint32_t cluster_replicate_timeout_ms = 1000;
+  // Writes a primary keeps in memory per collection, MiB, for copies that
+  // catch up after a short absence; one further behind is copied whole.
+  uint32_t cluster_log_mb = 64;
+  // Keys in etcd start with this.
+  std::string cluster_prefix = "/lmd";
+  // With tokens_file: a file holding the token (first line) this node sends
+  // on calls to other nodes; it needs write access to every collection ("*").
+  std::string cluster_token_file;
 };
 
 // Reads "key = value" lines ('#' starts a comment; keys are the field names

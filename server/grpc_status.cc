@@ -14,11 +14,30 @@ grpc::Status ToGrpcStatus(const Status& status) {
     case Status::Code::kCancelled: return {grpc::StatusCode::CANCELLED, status.message()};
     case Status::Code::kDeadlineExceeded: return {grpc::StatusCode::DEADLINE_EXCEEDED, status.message()};
     case Status::Code::kFailedPrecondition: return {grpc::StatusCode::FAILED_PRECONDITION, status.message()};
+    case Status::Code::kUnavailable: return {grpc::StatusCode::UNAVAILABLE, status.message()};
     case Status::Code::kCorruption:
     case Status::Code::kIoError:
     case Status::Code::kInternal: return {grpc::StatusCode::INTERNAL, status.ToString()};
   }
   return {grpc::StatusCode::UNKNOWN, status.ToString()};
+}
+
+Status FromGrpcStatus(const grpc::Status& status) {
+  const std::string& m = status.error_message();
+  switch (status.error_code()) {
+    case grpc::StatusCode::OK: return Status::Ok();
+    case grpc::StatusCode::INVALID_ARGUMENT: return Status::InvalidArgument(m);
+    case grpc::StatusCode::NOT_FOUND: return Status::NotFound(m);
+    case grpc::StatusCode::ALREADY_EXISTS: return Status::AlreadyExists(m);
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return Status::ResourceExhausted(m);
+    case grpc::StatusCode::UNAUTHENTICATED: return Status::Unauthenticated(m);
+    case grpc::StatusCode::PERMISSION_DENIED: return Status::PermissionDenied(m);
+    case grpc::StatusCode::CANCELLED: return Status::Cancelled(m);
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return Status::DeadlineExceeded(m);
+    case grpc::StatusCode::FAILED_PRECONDITION: return Status::FailedPrecondition(m);
+    case grpc::StatusCode::UNAVAILABLE: return Status::Unavailable(m);
+    default: return Status::Internal(m);
+  }
 }
 
 }  // namespace lmd::server

@@ -11,6 +11,11 @@ namespace lmd::server {
 // ALREADY_EXISTS, ResourceExhausted -> RESOURCE_EXHAUSTED, Unauthenticated,
 // PermissionDenied, Cancelled, DeadlineExceeded -> the same, Corruption /
 // IoError / Internal -> INTERNAL (the message is kept), Ok -> OK.
+// Unavailable -> UNAVAILABLE.
 grpc::Status ToGrpcStatus(const Status& status);
+
+// The reverse, for a call lmdd forwarded to another node: its answer goes
+// back to the client as it came (codes without an lmd equivalent: Internal).
+Status FromGrpcStatus(const grpc::Status& status);
 
 }  // namespace lmd::server

@@ -112,7 +112,24 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
   limits.max_collections = config_.max_collections;
   limits.retain_maps = config_.retain_maps_per_collection;
   std::vector<v1::MapMetadata> evicted;
-  Status stored = store_->InsertMaps(&maps, limits, &evicted);
+  Status stored;
+  if (cluster_ != nullptr) {  // the stream's maps too: each of its batches holds one map
+    const std::string& collection = maps.front().map.metadata().collection();
+    for (const MapWrite& write : maps) {
+      if (write.map.metadata().collection() != collection) {
+        return Status::InvalidArgument("in a cluster, one write holds maps of one collection");
+      }
+    }
+    Result<cluster::ClusterNode::Route> route = cluster_->ForWrite(collection);
+    if (!route.ok()) return route.status();
+    if (!route->here) {
+      return Status::Unavailable("this node is not the primary of collection '" + collection + "': send to " +
+                                 route->address);
+    }
+    stored = cluster_->Insert(collection, &maps, limits, &evicted);
+  } else {
+    stored = store_->InsertMaps(&maps, limits, &evicted);
+  }
   if (!stored.ok()) return stored;
   // Prepared for scan matching already: the first query that hits them reuses it.
   for (size_t i = 0; i < maps.size(); ++i) {
@@ -140,6 +157,13 @@ grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext
     }
     Status unique = DistinctIds(*request);
     if (!unique.ok()) return unique;
+    if (cluster_ != nullptr && BatchCollection(*request).empty()) {
+      return Status::InvalidArgument("in a cluster, one InsertMaps call holds maps of one collection");
+    }
+    if (auto elsewhere = ServedElsewhere(true, BatchCollection(*request), context, &v1::LmdService::Stub::InsertMaps,
+                                         *request, response)) {
+      return *elsewhere;
+    }
     std::vector<const v1::InsertMapRequest*> maps;
     for (const auto& map : request->maps()) maps.push_back(&map);
     return Insert(maps, 0, response);
@@ -157,6 +181,10 @@ grpc::ServerUnaryReactor* LmdServiceImpl::GetMap(grpc::CallbackServerContext* co
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     Status valid = ValidateKey(request->collection(), request->map_id());
     if (!valid.ok()) return valid;
+    if (auto elsewhere = ServedElsewhere(false, request->collection(), context, &v1::LmdService::Stub::GetMap, *request,
+                                         response)) {
+      return *elsewhere;
+    }
     Result<v1::StoredMap> map = store_->GetMap(request->collection(), request->map_id());
     if (!map.ok()) return map.status();
     *response->mutable_map() = std::move(map).value();
@@ -165,11 +193,18 @@ grpc::ServerUnaryReactor* LmdServiceImpl::GetMap(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* LmdServiceImpl::DeleteMap(grpc::CallbackServerContext* context,
-                                                    const v1::DeleteMapRequest* request, v1::DeleteMapResponse*) {
+                                                    const v1::DeleteMapRequest* request,
+                                                    v1::DeleteMapResponse* response) {
   return runner_->Unary(context, "DeleteMap", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kWrite), [=] {
     Status status = ValidateKey(request->collection(), request->map_id());
-    return status.ok() ? store_->DeleteMap(request->collection(), request->map_id()) : status;
+    if (!status.ok()) return status;
+    if (auto elsewhere = ServedElsewhere(true, request->collection(), context, &v1::LmdService::Stub::DeleteMap,
+                                         *request, response)) {
+      return *elsewhere;
+    }
+    if (cluster_ != nullptr) return cluster_->Delete(request->collection(), request->map_id());
+    return store_->DeleteMap(request->collection(), request->map_id());
   });
 }
 
@@ -181,6 +216,10 @@ grpc::ServerUnaryReactor* LmdServiceImpl::ListMaps(grpc::CallbackServerContext* 
     Status status = ValidateCollectionName(request->collection());
     if (status.ok() && !request->page_token().empty()) status = ValidateMapId(request->page_token(), false);
     if (!status.ok()) return status;
+    if (auto elsewhere = ServedElsewhere(false, request->collection(), context, &v1::LmdService::Stub::ListMaps,
+                                         *request, response)) {
+      return *elsewhere;
+    }
     const uint32_t page_size =
         request->page_size() == 0 ? kDefaultPageSize : std::min(request->page_size(), 10 * kDefaultPageSize);
     std::vector<v1::MapMetadata> maps;
@@ -239,6 +278,14 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Backup(grpc::CallbackServerContext* co
     if (!bytes.ok()) return bytes.status();
     response->set_directory(request->directory());
     response->set_bytes(*bytes);
+    return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::Cluster(grpc::CallbackServerContext* context, const v1::ClusterRequest*,
+                                                  v1::ClusterResponse* response) {
+  return runner_->Unary(context, "Cluster", "", runner_->AuthorizeServerWide(context, Access::kRead), [=] {
+    if (cluster_ != nullptr) cluster_->Describe(response);
     return Status::Ok();
   });
 }

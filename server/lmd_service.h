@@ -5,6 +5,7 @@
 #pragma once
 
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include "lmd/v1/lmd.grpc.pb.h"
@@ -12,6 +13,8 @@
 #include "server/config.h"
 #include "core/change/change_detector.h"
 #include "core/localize/localizer.h"
+#include "server/cluster/cluster_node.h"
+#include "server/cluster/forwarder.h"
 #include "server/descriptor_cache.h"
 #include "server/map_store.h"
 #include "server/prepared_maps.h"
@@ -46,6 +49,12 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   grpc::ServerUnaryReactor* DetectChanges(grpc::CallbackServerContext* context,
                                           const v1::DetectChangesRequest* request,
                                           v1::DetectChangesResponse* response) override;
+  grpc::ServerUnaryReactor* Cluster(grpc::CallbackServerContext* context, const v1::ClusterRequest* request,
+                                    v1::ClusterResponse* response) override;
+
+  // In a cluster (server/cluster): calls on collections this node does not
+  // serve are forwarded, and writes are replicated. `node` outlives the service.
+  void SetCluster(cluster::ClusterNode* node) { cluster_ = node; }
 
   // Validates and stores one batch (also used per message by the stream).
   Status Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
@@ -54,6 +63,22 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   const ServerConfig& config() const { return config_; }
 
  private:
+  // In a cluster, when another node serves `collection` (a write: its
+  // primary; a read: any in-sync copy): the call forwarded there, with its
+  // status. Nothing when the call is served here (always, without a cluster).
+  template <typename Request, typename Response>
+  std::optional<Status> ServedElsewhere(bool write, const std::string& collection,
+                                        const grpc::CallbackServerContext* context,
+                                        grpc::Status (v1::LmdService::Stub::*method)(grpc::ClientContext*,
+                                                                                    const Request&, Response*),
+                                        const Request& request, Response* response) {
+    if (cluster_ == nullptr || (!write && cluster::Forwarder::WantsLocal(context))) return std::nullopt;
+    Result<cluster::ClusterNode::Route> route = write ? cluster_->ForWrite(collection) : cluster_->ForRead(collection);
+    if (!route.ok()) return route.status();
+    if (route->here) return std::nullopt;
+    return forwarder_.Forward(route->address, context, method, request, response);
+  }
+
   // What lmdd computes from `map` (the default method's preparation, and
   // the paper's descriptor when `with_lmd`), from the cache when the same map
   // was seen recently; `key` (if not null) receives its content key.
@@ -112,6 +137,8 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   mutable DescriptorCache cache_;
   mutable PreparedMapCache prepared_;
   mutable RecentFixes fixes_;
+  cluster::ClusterNode* cluster_ = nullptr;
+  cluster::Forwarder forwarder_;
 };
 
 }  // namespace lmd::server

@@ -326,7 +326,7 @@ Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
 }
 
 Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
-                            std::vector<v1::MapMetadata>* evicted) {
+                            std::vector<v1::MapMetadata>* evicted, const ReplicationMark* mark) {
   std::lock_guard<std::mutex> lock(write_mutex_);
   // Counters change on copies, published only once the batch is written.
   std::map<std::string, internal::CollectionRecord> records;
@@ -474,6 +474,11 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
                                        " maps; one collection's index holds at most " + std::to_string(kMaxMaps));
     }
   }
+  if (mark != nullptr) {
+    if (records.size() != 1) return Status::InvalidArgument("a replicated write holds maps of one collection only");
+    records.begin()->second.set_replication_epoch(mark->epoch);
+    records.begin()->second.set_replication_seq(mark->seq);
+  }
   for (const auto& [name, record] : records) batch.Put(collections_cf_, name, record.SerializeAsString());
   rocksdb::WriteOptions write_options;
   write_options.sync = sync_writes_;
@@ -542,7 +547,7 @@ Result<Lmd> MapStore::GetDescriptor(const std::string& collection, const std::st
   return DecodeLmd(indexed->lmd());
 }
 
-Status MapStore::DeleteMap(const std::string& collection, const std::string& map_id) {
+Status MapStore::DeleteMap(const std::string& collection, const std::string& map_id, const ReplicationMark* mark) {
   std::lock_guard<std::mutex> lock(write_mutex_);
   CollectionState* state = FindCollection(collection);
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
@@ -563,6 +568,10 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   record.set_maps(record.maps() - 1);
   record.set_points(record.points() - meta->point_count());
   record.set_postings(record.postings() - PoseFeatureCount(*lmd));
+  if (mark != nullptr) {
+    record.set_replication_epoch(mark->epoch);
+    record.set_replication_seq(mark->seq);
+  }
   rocksdb::WriteBatch batch;
   batch.Delete(maps_cf_, key);
   batch.Delete(metadata_cf_, key);
@@ -584,6 +593,69 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   state->anchors.Remove(indexed->index_id());
   state->map_ids.erase(indexed->index_id());
   return Status::Ok();
+}
+
+ReplicationMark MapStore::MarkOf(const std::string& collection) const {
+  std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+  const CollectionState* state = FindCollection(collection);
+  if (state == nullptr) return {};
+  return {state->record.replication_epoch(), state->record.replication_seq()};
+}
+
+Status MapStore::SetMark(const std::string& collection, const ReplicationMark& mark) {
+  std::lock_guard<std::mutex> lock(write_mutex_);
+  CollectionState* state = FindCollection(collection);
+  internal::CollectionRecord record = state ? state->record : internal::CollectionRecord();
+  record.set_replication_epoch(mark.epoch);
+  record.set_replication_seq(mark.seq);
+  rocksdb::WriteOptions write_options;
+  write_options.sync = sync_writes_;
+  Status status = FromRocks(db_->Put(write_options, collections_cf_, collection, record.SerializeAsString()),
+                            "writing the replication mark of " + collection);
+  if (!status.ok()) return status;
+  std::unique_lock<std::shared_mutex> collections_lock(collections_mutex_);
+  auto& owned = collections_[collection];
+  if (!owned) owned = std::make_unique<CollectionState>(indexing_.index);
+  owned->record = record;
+  return Status::Ok();
+}
+
+Status MapStore::ForEachMap(const std::string& collection, size_t chunk,
+                            const std::function<bool(std::vector<StoredEntry>&&)>& emit, ReplicationMark* mark) const {
+  if (!HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
+  const rocksdb::Snapshot* snapshot = db_->GetSnapshot();
+  rocksdb::ReadOptions read;
+  read.snapshot = snapshot;
+  auto finish = [&](Status status) {
+    db_->ReleaseSnapshot(snapshot);
+    return status;
+  };
+  std::string value;
+  rocksdb::Status got = db_->Get(read, collections_cf_, collection, &value);
+  internal::CollectionRecord record;
+  if (!got.ok() || !record.ParseFromString(value)) return finish(Status::Corruption("record of " + collection));
+  *mark = {record.replication_epoch(), record.replication_seq()};
+  const std::string prefix = collection + "/";
+  std::unique_ptr<rocksdb::Iterator> it(db_->NewIterator(read, maps_cf_));
+  std::vector<StoredEntry> entries;
+  for (it->Seek(prefix); it->Valid() && it->key().starts_with(prefix); it->Next()) {
+    StoredEntry entry;
+    if (!entry.map.ParseFromArray(it->value().data(), static_cast<int>(it->value().size()))) {
+      return finish(Status::Corruption("stored map " + it->key().ToString() + " does not parse"));
+    }
+    got = db_->Get(read, descriptors_cf_, it->key(), &value);
+    if (!got.ok() || !entry.indexed.ParseFromString(value)) {
+      return finish(Status::Corruption("descriptor of " + it->key().ToString()));
+    }
+    entries.push_back(std::move(entry));
+    if (entries.size() == chunk) {
+      if (!emit(std::move(entries))) return finish(Status::Cancelled("copy of " + collection + " stopped"));
+      entries.clear();
+    }
+  }
+  if (!it->status().ok()) return finish(FromRocks(it->status(), "reading " + collection));
+  if (!entries.empty() && !emit(std::move(entries))) return finish(Status::Cancelled("copy of " + collection + " stopped"));
+  return finish(Status::Ok());
 }
 
 Status MapStore::ListMaps(const std::string& collection, const std::string& after, uint32_t limit,

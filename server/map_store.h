@@ -90,6 +90,19 @@ struct InsertLimits {
   uint32_t retain_maps = 0;
 };
 
+// A replicated collection's last write (server/cluster): its primary's
+// epoch and the write's number. Written in the same batch as the write.
+struct ReplicationMark {
+  uint64_t epoch = 0;
+  uint64_t seq = 0;
+};
+
+// A stored map with what lmdd computed from it, as a replica copies it.
+struct StoredEntry {
+  v1::StoredMap map;
+  internal::IndexedMap indexed;  // its descriptor and place features (index_id is the source's own)
+};
+
 struct CollectionState;
 
 class MapStore {
@@ -114,8 +127,10 @@ class MapStore {
   // if the batch alone holds more than retain_maps maps of one collection.
   // The metadata of maps deleted to keep within retain_maps is appended to
   // *evicted (oldest first; may be null).
+  // With `mark`, the batch must hold one collection only, and its
+  // replication mark is set in the same write.
   Status InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
-                    std::vector<v1::MapMetadata>* evicted = nullptr);
+                    std::vector<v1::MapMetadata>* evicted = nullptr, const ReplicationMark* mark = nullptr);
 
   // NotFound naming the collection or the map if absent.
   Result<v1::StoredMap> GetMap(const std::string& collection, const std::string& map_id) const;
@@ -125,7 +140,19 @@ class MapStore {
   Result<Lmd> GetDescriptor(const std::string& collection, const std::string& map_id) const;
 
   // Deletes one map with its descriptor and postings. NotFound if absent.
-  Status DeleteMap(const std::string& collection, const std::string& map_id);
+  // With `mark`, the collection's replication mark is set in the same write.
+  Status DeleteMap(const std::string& collection, const std::string& map_id, const ReplicationMark* mark = nullptr);
+
+  // The collection's replication mark ({0, 0} if unknown or never replicated).
+  ReplicationMark MarkOf(const std::string& collection) const;
+  // Sets the mark alone, creating the collection (empty) if absent.
+  Status SetMark(const std::string& collection, const ReplicationMark& mark);
+  // Every map of the collection from one consistent snapshot, in id order,
+  // `chunk` at a time to `emit` (which may stop the walk by returning
+  // false); *mark receives the mark that snapshot holds. NotFound for an
+  // unknown collection.
+  Status ForEachMap(const std::string& collection, size_t chunk,
+                    const std::function<bool(std::vector<StoredEntry>&&)>& emit, ReplicationMark* mark) const;
 
   // Up to `limit` maps' metadata in id order, starting after `after` (empty:
   // from the first). *next is the last id returned when more may follow, else

@@ -243,6 +243,10 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
                                                    v1::RetrieveResponse* response) {
   return runner_->Unary(context, "Retrieve", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
+    if (auto elsewhere = ServedElsewhere(false, request->collection(), context, &v1::LmdService::Stub::Retrieve,
+                                         *request, response)) {
+      return *elsewhere;
+    }
     const double cpu_start = ThreadCpuMs();
     Result<Query> query = RunQuery(QueryOf(*request, false), context);
     if (!query.ok()) return query.status();
@@ -292,6 +296,10 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
     const double cpu_start = ThreadCpuMs();
     if (!(request->threshold() >= 0) || !std::isfinite(request->threshold())) {
       return Status::InvalidArgument("threshold must be a finite number >= 0 (0: the default)");
+    }
+    if (auto elsewhere = ServedElsewhere(false, request->collection(), context,
+                                         &v1::LmdService::Stub::DetectChanges, *request, response)) {
+      return *elsewhere;
     }
     Result<Query> query = RunQuery(QueryOf(*request, true), context);
     if (!query.ok()) return query.status();

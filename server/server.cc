@@ -14,6 +14,8 @@
 #include "grpc/health/v1/health.pb.h"
 #include "server/auth.h"
 #include "server/call_runner.h"
+#include "server/cluster/cluster_node.h"
+#include "server/cluster/replica_service.h"
 #include "server/lmd_service.h"
 #include "server/indexing.h"
 #include "server/map_store.h"
@@ -96,6 +98,16 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   server->runner_ = std::make_unique<CallRunner>(server->pool_.get(), server->auth_.get(), server->metrics_.get());
   server->service_ = std::make_unique<LmdServiceImpl>(config, server->store_.get(), server->runner_.get(),
                                                       server->metrics_.get());
+  if (!config.cluster_etcd.empty()) {
+    Result<std::unique_ptr<cluster::ClusterNode>> node = cluster::ClusterNode::Start(config, server->store_.get());
+    if (!node.ok()) {
+      server->store_->Close();
+      return node.status();
+    }
+    server->cluster_ = std::move(node).value();
+    server->service_->SetCluster(server->cluster_.get());
+    server->replica_service_ = std::make_unique<cluster::ReplicaService>(server->cluster_.get(), server->auth_.get());
+  }
 
   // Reflection serves descriptors from the generated pool; the built-in health
   // service has none, so its messages are linked in from lmd_proto here.
@@ -111,8 +123,10 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   builder.RegisterService(server->service_.get());
+  if (server->replica_service_) builder.RegisterService(server->replica_service_.get());
   server->server_ = builder.BuildAndStart();
   if (!server->server_ || server->port_ == 0) {
+    if (server->cluster_) server->cluster_->Stop();
     server->store_->Close();
     return Status::Internal("cannot listen on " + config.listen);
   }
@@ -149,6 +163,8 @@ void LmdServer::Shutdown(std::chrono::milliseconds grace) {
   stopped_ = true;
   spdlog::info("lmdd shutting down (grace {} ms)", grace.count());
   server_->GetHealthCheckService()->SetServingStatus(false);
+  // Leaving the cluster first hands this node's primaries over at once.
+  if (cluster_) cluster_->Stop();
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   metrics_http_.reset();
   pool_.reset();  // runs what is queued, joins the workers

@@ -15,6 +15,10 @@ class Server;
 
 namespace lmd::server {
 
+namespace cluster {
+class ClusterNode;
+class ReplicaService;
+}  // namespace cluster
 class CallMetrics;
 class CallRunner;
 class LmdServiceImpl;
@@ -49,6 +53,8 @@ class LmdServer {
   LmdServer();
 
   std::unique_ptr<MapStore> store_;
+  std::unique_ptr<cluster::ClusterNode> cluster_;  // with cluster_etcd only
+  std::unique_ptr<cluster::ReplicaService> replica_service_;
   std::unique_ptr<TokenAuthorizer> auth_;
   std::unique_ptr<CallMetrics> metrics_;
   std::unique_ptr<WorkerPool> pool_;

@@ -6,6 +6,7 @@
 #include "bench/bench/index_bench.h"
 #include "bench/bench/load_bench.h"
 #include "bench/bench/places_bench.h"
+#include "bench/bench/writes_bench.h"
 
 int main(int argc, char** argv) {
   const std::string command = argc > 1 ? argv[1] : "";
@@ -13,6 +14,7 @@ int main(int argc, char** argv) {
   if (command == "load") return lmd::bench::RunLoadBench(argc - 2, argv + 2);
   if (command == "fill") return lmd::bench::RunFillBench(argc - 2, argv + 2);
   if (command == "places") return lmd::bench::RunPlacesBench(argc - 2, argv + 2);
+  if (command == "writes") return lmd::bench::RunWritesBench(argc - 2, argv + 2);
   if (command.empty() || command == "-h" || command == "--help") {
     std::printf("usage: lmd-bench <command> [options]\n"
                 "commands:\n"
@@ -23,7 +25,9 @@ int main(int argc, char** argv) {
                 "       [--mode fleet]                     robots tracking with priors from drifting odometry\n"
                 "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
                 "                                          store N simulated maps (scale runs)\n"
-                "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n");
+                "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n"
+                "  writes --servers A,B,C --collection C --rate R --seconds S --acked FILE\n"
+                "       [--verify [--copies N]]            inserts through node failures; check nothing acknowledged is lost\n");
     return command.empty() ? 2 : 0;
   }
   std::fprintf(stderr, "lmd-bench: unknown command '%s' (try --help)\n", command.c_str());

@@ -32,6 +32,7 @@ int ListMapsCommand(const CommandContext& ctx);
 int CollectionsCommand(const CommandContext& ctx);
 int StatsCommand(const CommandContext& ctx);
 int BackupCommand(const CommandContext& ctx);
+int ClusterCommand(const CommandContext& ctx);
 int DemoCommand(const CommandContext& ctx);
 int IngestCommand(const CommandContext& ctx);
 int QueryCommand(const CommandContext& ctx);

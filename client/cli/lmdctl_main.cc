@@ -26,6 +26,7 @@ constexpr char kUsage[] =
     "  import-map --collection C --yaml MAP.yaml [--tile M]        a Nav2 map as anchored local maps (tiles of 12 m, half overlapping)\n"
     "  export-map --collection C --out MAP.yaml [--id ID]          anchored maps (or one map) as a Nav2 map (YAML + PGM)\n"
     "  stats [--collection C]                                      server and collection statistics\n"
+    "  cluster                                                     nodes, each collection's copies, in-sync sets and lag\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "QUERY is --file POINTS, --log FILE --map K or --bag PATH --map K; M is default, lmd-cor, lmd-cog or bow;\n"
@@ -50,6 +51,7 @@ const std::map<std::string, Command>& Commands() {
       {"delete", DeleteCommand},   {"list", ListMapsCommand},
       {"maps", ListMapsCommand},   {"collections", CollectionsCommand},
       {"stats", StatsCommand},     {"backup", BackupCommand},
+      {"cluster", ClusterCommand},
       {"demo", DemoCommand},       {"ingest", IngestCommand},
       {"query", QueryCommand},     {"changes", ChangesCommand},
       {"render", RenderCommand},   {"import-map", ImportMapCommand},

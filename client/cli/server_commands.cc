@@ -62,4 +62,37 @@ int BackupCommand(const CommandContext& ctx) {
   return 0;
 }
 
+int ClusterCommand(const CommandContext& ctx) {
+  v1::ClusterResponse response;
+  const grpc::Status status = ctx.client.Cluster(&response);
+  if (!status.ok()) return FailCall(status);
+  if (ctx.json) {
+    std::printf("%s\n", ToJsonLine(response).c_str());
+    return 0;
+  }
+  if (!response.enabled()) {
+    std::printf("not in a cluster: this lmdd runs alone (cluster_etcd is not set)\n");
+    return 0;
+  }
+  std::printf("answered by %s; controller %s\n", response.node_id().c_str(), response.controller().c_str());
+  for (const auto& node : response.nodes()) {
+    std::printf("node %-16s %-22s%s%s\n", node.node_id().c_str(), node.address().c_str(),
+                node.zone().empty() ? "" : " zone ", node.zone().c_str());
+  }
+  for (const auto& placement : response.placements()) {
+    std::printf("collection %-20s epoch %llu\n", placement.collection().c_str(),
+                static_cast<unsigned long long>(placement.epoch()));
+    for (const auto& copy : placement.copies()) {
+      const char* role = copy.primary() ? "primary" : copy.in_sync() ? "in sync" : "catching up";
+      if (copy.reachable()) {
+        std::printf("  %-16s %-12s seq %-8llu lag %llu\n", copy.node_id().c_str(), role,
+                    static_cast<unsigned long long>(copy.seq()), static_cast<unsigned long long>(copy.lag()));
+      } else {
+        std::printf("  %-16s %-12s down\n", copy.node_id().c_str(), role);
+      }
+    }
+  }
+  return 0;
+}
+
 }  // namespace lmd::cli

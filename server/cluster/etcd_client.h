@@ -87,7 +87,8 @@ class EtcdClient {
   // that lease does not exist). Returns the key's new mod_revision.
   Result<int64_t> Put(const std::string& key, const std::string& value, int64_t lease = 0);
 
-  // Deletes `key`; true if it existed.
+  // Deletes `key`; true if it existed (false too when an attempt lost in a
+  // failover had deleted it).
   Result<bool> Delete(const std::string& key);
 
   // Compare-and-swap: sets `key` only if its mod_revision is still

@@ -27,8 +27,8 @@ grpc::ChannelArguments ChannelArgs() {
   return args;
 }
 
-// How long Pause waits on one channel before it checks `stop` again.
-constexpr auto kPauseSlice = std::chrono::milliseconds(50);
+// How long WaitPolling waits on one channel before it checks `stop` again.
+constexpr auto kPollSlice = std::chrono::milliseconds(50);
 
 bool Retryable(grpc::StatusCode code) {
   return code == grpc::StatusCode::UNAVAILABLE || code == grpc::StatusCode::DEADLINE_EXCEEDED;
@@ -59,7 +59,7 @@ bool EtcdEndpoints::Connected(size_t i, Clock::time_point deadline) const {
   return true;
 }
 
-bool EtcdEndpoints::Pause(Clock::time_point until, const std::function<bool()>& stop) const {
+bool EtcdEndpoints::WaitPolling(Clock::time_point until, const std::function<bool()>& stop) const {
   for (size_t slice = 0;; ++slice) {
     if (stop && stop()) return false;
     const auto now = Clock::now();
@@ -67,7 +67,7 @@ bool EtcdEndpoints::Pause(Clock::time_point until, const std::function<bool()>& 
     // A thread waiting on any channel polls every channel's sockets.
     grpc::Channel& channel = *members_[slice % members_.size()].channel;
     channel.WaitForStateChange(channel.GetState(/*try_to_connect=*/false),
-                               GrpcDeadline(std::min<Clock::time_point>(until, now + kPauseSlice)));
+                               GrpcDeadline(std::min<Clock::time_point>(until, now + kPollSlice)));
   }
 }
 
@@ -84,7 +84,7 @@ Status EtcdEndpoints::Call(const std::string& what, const Attempt& attempt, Stat
       if ((round > 0 || k > 0) && Clock::now() >= give_up) break;
       const auto deadline = Clock::now() + timeout;
       if (!Connected(i, deadline)) {
-        last = Status::IoError("etcd " + endpoint(i) + " unavailable: " + what + ": cannot connect");
+        last = Status::Unavailable("etcd " + endpoint(i) + " unavailable: " + what + ": cannot connect");
         spdlog::debug("{}; trying the next endpoint", last.message());
         continue;
       }
@@ -105,12 +105,14 @@ Status EtcdEndpoints::Call(const std::string& what, const Attempt& attempt, Stat
         if (unsure != nullptr) *unsure = first_unsure;
         return last;
       }
-      if (first_unsure.ok()) first_unsure = last;  // it was sent: etcd may have applied it
+      // It was sent, so etcd may have applied it; unless the member refused it
+      // up front for want of a leader (etcd's ErrGRPCNoLeader, under "hasleader").
+      if (first_unsure.ok() && status.error_message() != "etcdserver: no leader") first_unsure = last;
       spdlog::debug("{}; trying the next endpoint", last.message());
     }
     const auto now = Clock::now();
     if (now >= give_up) break;
-    Pause(std::min<Clock::time_point>(now + pause, give_up));
+    WaitPolling(std::min<Clock::time_point>(now + pause, give_up));
     pause = std::min(pause * 2, std::chrono::milliseconds(500));
   }
   if (unsure != nullptr) *unsure = first_unsure;
@@ -122,7 +124,7 @@ Status EtcdEndpoints::ToStatus(size_t i, const std::string& what, const grpc::St
   const std::string tail = what + ": " + status.error_message();
   switch (status.error_code()) {
     case grpc::StatusCode::OK: return Status::Ok();
-    case grpc::StatusCode::UNAVAILABLE: return Status::IoError(where + " unavailable: " + tail);
+    case grpc::StatusCode::UNAVAILABLE: return Status::Unavailable(where + " unavailable: " + tail);
     case grpc::StatusCode::DEADLINE_EXCEEDED:
       return Status::DeadlineExceeded(where + " timed out after " + std::to_string(options_.call_timeout_ms) +
                                       " ms: " + tail);

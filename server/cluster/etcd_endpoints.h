@@ -64,7 +64,7 @@ class EtcdEndpoints {
   // with the synchronous API no other thread polls the sockets (gRPC's
   // backup poller runs every 5 s), so a client that slept between attempts
   // would find a restarted member only by chance.
-  bool Pause(Clock::time_point until, const std::function<bool()>& stop = nullptr) const;
+  bool WaitPolling(Clock::time_point until, const std::function<bool()>& stop = nullptr) const;
 
   // `status`, which endpoint `i` returned for `what`, as a Status:
   // "etcd 127.0.0.1:2379 unavailable: put \"a\": <gRPC message>".

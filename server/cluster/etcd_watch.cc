@@ -66,7 +66,7 @@ void PrefixWatcher::Run() {
       pause = kMinPause;
     } else {
       spdlog::debug("{}; trying {} in {} ms", failure.message(), endpoints_->endpoint(next), pause.count());
-      if (!endpoints_->Pause(Clock::now() + pause, [this] { return stopping(); })) return;
+      if (!endpoints_->WaitPolling(Clock::now() + pause, [this] { return stopping(); })) return;
       pause = std::min(pause * 2, kMaxPause);
     }
     i = next;

@@ -51,16 +51,16 @@ void LeaseKeeper::Run() {
                                            std::to_string(lease_.ttl_seconds) +
                                            " s) expired before it could be renewed: " + last_error.message()));
     }
-    const Result<int64_t> ttl_left = Renew(i, std::min(sent + timeout, expires));
+    const Result<int64_t> renewed = Renew(i, std::min(sent + timeout, expires));
     if (stopping()) return;  // the renewal was cancelled
-    if (ttl_left.ok()) {
-      if (*ttl_left <= 0) {
+    if (renewed.ok()) {
+      if (*renewed <= 0) {
         return Lose(Status::NotFound("etcd " + endpoints_->endpoint(i) + ": " + LeaseName(lease_.id) +
                                      " has expired or was revoked (keep-alive answered TTL " +
-                                     std::to_string(*ttl_left) + ")"));
+                                     std::to_string(*renewed) + ")"));
       }
       // etcd renewed it when it got the request, which was after `sent`.
-      expires = sent + std::chrono::seconds(*ttl_left);
+      expires = sent + std::chrono::seconds(*renewed);
       if (!last_error.ok()) {
         spdlog::warn("etcd: {} renewed at {} again", LeaseName(lease_.id), endpoints_->endpoint(i));
         last_error = Status::Ok();
@@ -71,13 +71,13 @@ void LeaseKeeper::Run() {
     // The first failure after a success is news; retries until expiry are not.
     const size_t next = (i + 1) % endpoints_->size();
     if (last_error.ok()) {
-      spdlog::warn("{}; renewing at {} next", ttl_left.status().message(), endpoints_->endpoint(next));
+      spdlog::warn("{}; renewing at {} next", renewed.status().message(), endpoints_->endpoint(next));
     } else {
-      spdlog::debug("{}; renewing at {} next", ttl_left.status().message(), endpoints_->endpoint(next));
+      spdlog::debug("{}; renewing at {} next", renewed.status().message(), endpoints_->endpoint(next));
     }
-    last_error = ttl_left.status();
+    last_error = renewed.status();
     i = next;
-    if (!endpoints_->Pause(std::min(Clock::now() + kRetryPause, expires), [this] { return stopping(); })) return;
+    if (!endpoints_->WaitPolling(std::min(Clock::now() + kRetryPause, expires), [this] { return stopping(); })) return;
   }
 }
 

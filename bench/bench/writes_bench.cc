@@ -1,0 +1,180 @@
+#include "bench/bench/writes_bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "core/sim/simulate.h"
+#include "lmd/v1/lmd.grpc.pb.h"
+#include "proto/convert.h"
+
+namespace lmd::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::vector<std::string> SplitCommas(const std::string& s) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in(s);
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+std::unique_ptr<v1::LmdService::Stub> StubFor(const std::string& address) {
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(-1);
+  return v1::LmdService::NewStub(grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args));
+}
+
+int Write(const std::vector<std::string>& servers, const std::string& collection, double rate, double seconds,
+          const std::string& acked_path) {
+  std::ofstream acked(acked_path, std::ios::app);
+  if (!acked) {
+    std::fprintf(stderr, "lmd-bench writes: cannot write %s\n", acked_path.c_str());
+    return 1;
+  }
+  std::vector<std::unique_ptr<v1::LmdService::Stub>> stubs;
+  for (const std::string& s : servers) stubs.push_back(StubFor(s));
+  SimulationOptions sim;
+  sim.num_maps = std::max<size_t>(1, static_cast<size_t>(rate * seconds));
+  sim.local_map.id_prefix = "w";
+  std::vector<LocalMap> maps;
+  SimulateLocalMapsStreaming(sim, [&](LocalMap&& map) {
+    maps.push_back(std::move(map));
+    return true;
+  });
+  size_t server = 0, failures = 0, count = 0;
+  double longest_gap_s = 0;
+  const auto start = Clock::now();
+  auto last_ack = start;
+  for (size_t i = 0; i < maps.size(); ++i) {
+    std::this_thread::sleep_until(start + std::chrono::microseconds(static_cast<int64_t>(i * 1e6 / rate)));
+    char id[32];
+    std::snprintf(id, sizeof id, "w%08zu", i);
+    v1::InsertMapsRequest request;
+    v1::InsertMapRequest* insert = request.add_maps();
+    insert->mutable_metadata()->set_collection(collection);
+    insert->mutable_metadata()->set_map_id(id);
+    *insert->mutable_map() = ToProto(maps[i]);
+    for (;;) {
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(3));
+      v1::InsertMapsResponse response;
+      const grpc::Status status = stubs[server]->InsertMaps(&context, request, &response);
+      if (status.ok()) break;
+      ++failures;
+      if (failures <= 20 || failures % 50 == 0) {
+        std::fprintf(stderr, "write %s to %s: %s\n", id, servers[server].c_str(), status.error_message().c_str());
+      }
+      server = (server + 1) % servers.size();
+      if (Clock::now() - last_ack > std::chrono::seconds(60)) {
+        std::fprintf(stderr, "lmd-bench writes: nothing acknowledged for 60 s; giving up\n");
+        return 1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    const auto now = Clock::now();
+    longest_gap_s = std::max(longest_gap_s, std::chrono::duration<double>(now - last_ack).count());
+    last_ack = now;
+    acked << id << '\n' << std::flush;
+    ++count;
+  }
+  const double took = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf("acknowledged %zu writes in %.1f s (%.0f/s), %zu failed attempts, longest gap %.2f s\n", count, took,
+              count / took, failures, longest_gap_s);
+  return 0;
+}
+
+int Verify(const std::vector<std::string>& servers, const std::string& collection, const std::string& acked_path,
+           size_t copies_needed) {
+  std::ifstream in(acked_path);
+  std::set<std::string> acked;
+  for (std::string id; std::getline(in, id);) {
+    if (!id.empty()) acked.insert(id);
+  }
+  size_t complete = 0;
+  for (const std::string& address : servers) {
+    std::unique_ptr<v1::LmdService::Stub> stub = StubFor(address);
+    std::multiset<std::string> held;
+    std::string page;
+    bool ok = true;
+    for (;;) {
+      grpc::ClientContext context;
+      context.AddMetadata("lmd-local", "1");
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+      v1::ListMapsRequest request;
+      request.set_collection(collection);
+      request.set_page_token(page);
+      request.set_page_size(1000);
+      v1::ListMapsResponse response;
+      const grpc::Status status = stub->ListMaps(&context, request, &response);
+      if (!status.ok()) {
+        std::printf("%s: cannot list: %s\n", address.c_str(), status.error_message().c_str());
+        ok = false;
+        break;
+      }
+      for (const v1::MapMetadata& m : response.maps()) held.insert(m.map_id());
+      if (response.next_page_token().empty()) break;
+      page = response.next_page_token();
+    }
+    if (!ok) continue;
+    size_t missing = 0, duplicates = 0;
+    for (const std::string& id : acked) missing += held.count(id) == 0;
+    for (auto it = held.begin(); it != held.end(); it = held.upper_bound(*it)) duplicates += held.count(*it) > 1;
+    std::printf("%s: holds %zu maps; %zu of %zu acknowledged missing, %zu duplicated\n", address.c_str(), held.size(),
+                missing, acked.size(), duplicates);
+    complete += missing == 0 && duplicates == 0;
+  }
+  const bool pass = complete >= copies_needed;
+  std::printf("%s: %zu copies hold every acknowledged write (%zu needed)\n", pass ? "PASS" : "FAIL", complete,
+              copies_needed);
+  return pass ? 0 : 1;
+}
+
+}  // namespace
+
+int RunWritesBench(int argc, char** argv) {
+  std::string servers_flag, collection = "replicated", acked;
+  double rate = 100, seconds = 10;
+  bool verify = false;
+  long copies = -1;
+  for (int i = 0; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--verify") { verify = true; continue; }
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "lmd-bench writes: %s needs a value\n", flag.c_str());
+      return 2;
+    }
+    const std::string value = argv[++i];
+    if (flag == "--servers") servers_flag = value;
+    else if (flag == "--collection") collection = value;
+    else if (flag == "--acked") acked = value;
+    else if (flag == "--rate") rate = std::strtod(value.c_str(), nullptr);
+    else if (flag == "--seconds") seconds = std::strtod(value.c_str(), nullptr);
+    else if (flag == "--copies") copies = std::strtol(value.c_str(), nullptr, 10);
+    else {
+      std::fprintf(stderr, "lmd-bench writes: unknown flag %s\n", flag.c_str());
+      return 2;
+    }
+  }
+  const std::vector<std::string> servers = SplitCommas(servers_flag);
+  if (servers.empty() || acked.empty() || !(rate > 0) || !(seconds > 0)) {
+    std::fprintf(stderr, "lmd-bench writes: needs --servers, --acked, and a positive --rate and --seconds\n");
+    return 2;
+  }
+  if (verify) return Verify(servers, collection, acked, copies < 0 ? servers.size() : static_cast<size_t>(copies));
+  return Write(servers, collection, rate, seconds, acked);
+}
+
+}  // namespace lmd::bench

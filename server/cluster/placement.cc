@@ -1,0 +1,107 @@
+#include "server/cluster/placement.h"
+
+#include <algorithm>
+#include <functional>
+#include <vector>
+
+namespace lmd::server::cluster {
+namespace {
+
+uint64_t Rank(const std::string& collection, const std::string& node) {
+  uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a of "collection/node": stable across builds and hosts
+  for (char c : collection + "/" + node) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+  return h;
+}
+
+bool Contains(const google::protobuf::RepeatedPtrField<std::string>& list, const std::string& id) {
+  return std::find(list.begin(), list.end(), id) != list.end();
+}
+
+// Live nodes not in `taken`, best first for the collection: zones not in
+// `zones` before the others, then by rank.
+std::vector<std::string> Spares(const std::string& collection, const LiveNodes& live,
+                                const std::set<std::string>& taken, const std::set<std::string>& zones) {
+  std::vector<std::string> spares;
+  for (const auto& [id, node] : live) {
+    if (taken.count(id) == 0) spares.push_back(id);
+  }
+  auto fresh_zone = [&](const std::string& id) {
+    const std::string& zone = live.at(id).zone();
+    return zone.empty() || zones.count(zone) == 0;
+  };
+  std::sort(spares.begin(), spares.end(), [&](const std::string& a, const std::string& b) {
+    if (fresh_zone(a) != fresh_zone(b)) return fresh_zone(a);
+    return Rank(collection, a) > Rank(collection, b);
+  });
+  return spares;
+}
+
+// Adds spares as replicas (not in sync) one at a time, each choice seeing
+// the zones the earlier ones took.
+void AddSpares(const std::string& collection, const LiveNodes& live, size_t wanted, bool in_sync,
+               internal::Placement* placement) {
+  std::set<std::string> taken(placement->replicas().begin(), placement->replicas().end());
+  std::set<std::string> zones;
+  size_t live_replicas = 0;
+  for (const std::string& id : placement->replicas()) {
+    const auto it = live.find(id);
+    if (it == live.end()) continue;
+    ++live_replicas;
+    if (!it->second.zone().empty()) zones.insert(it->second.zone());
+  }
+  while (live_replicas < wanted) {
+    const std::vector<std::string> spares = Spares(collection, live, taken, zones);
+    if (spares.empty()) return;
+    const std::string& id = spares.front();
+    placement->add_replicas(id);
+    if (in_sync) placement->add_in_sync(id);
+    taken.insert(id);
+    if (!live.at(id).zone().empty()) zones.insert(live.at(id).zone());
+    ++live_replicas;
+  }
+}
+
+}  // namespace
+
+internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
+                                 size_t replication_factor) {
+  internal::Placement placement;
+  placement.set_epoch(1);
+  placement.set_primary(creator);
+  placement.add_in_sync(creator);
+  placement.add_replicas(creator);
+  LiveNodes with_creator = live;
+  with_creator.emplace(creator, internal::NodeRecord());
+  AddSpares(collection, with_creator, std::max<size_t>(1, replication_factor), /*in_sync=*/true, &placement);
+  return placement;
+}
+
+std::optional<internal::Placement> Repaired(const std::string& collection, const internal::Placement& current,
+                                            const LiveNodes& live, size_t replication_factor) {
+  internal::Placement next = current;
+  auto alive = [&](const std::string& id) { return live.count(id) != 0; };
+  if (!alive(current.primary())) {
+    const auto heir = std::find_if(current.in_sync().begin(), current.in_sync().end(),
+                                   [&](const std::string& id) { return id != current.primary() && alive(id); });
+    if (heir != current.in_sync().end()) {
+      next.set_primary(*heir);
+      next.set_epoch(current.epoch() + 1);
+    }
+  }
+  // In sync: the primary first, then the live others in their order.
+  next.clear_in_sync();
+  next.add_in_sync(next.primary());
+  for (const std::string& id : current.in_sync()) {
+    if (id != next.primary() && alive(id)) next.add_in_sync(id);
+  }
+  if (!alive(next.primary())) return std::nullopt;  // no live copy to promote: wait for one
+  AddSpares(collection, live, std::max<size_t>(1, replication_factor), /*in_sync=*/false, &next);
+  if (next.SerializeAsString() == current.SerializeAsString()) return std::nullopt;
+  return next;
+}
+
+bool InSync(const internal::Placement& placement, const std::string& node) {
+  return Contains(placement.in_sync(), node);
+}
+
+}  // namespace lmd::server::cluster

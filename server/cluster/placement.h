@@ -1,0 +1,42 @@
+// Placement decisions for replicated collections, as pure functions of the
+// cluster's state, so that they can be tested without etcd: which nodes hold
+// a new collection, and how a placement is repaired when nodes die or join.
+// The elected controller (cluster_node.h) applies repairs by compare-and-swap.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "lmd/internal/cluster.pb.h"
+
+namespace lmd::server::cluster {
+
+// Live nodes by id (their etcd key exists: their lease is renewed).
+using LiveNodes = std::map<std::string, internal::NodeRecord>;
+
+// The placement of a collection created by a write to `creator` (which
+// becomes its primary: the write needs no forward): `creator` and the
+// replication_factor - 1 other live nodes that rank highest for the
+// collection (rendezvous hashing, so collections spread evenly and a node
+// joining moves few), preferring zones not yet used. Every copy of a new,
+// empty collection is in sync. Epoch 1.
+internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
+                                 size_t replication_factor);
+
+// The repaired placement, or nothing when `current` needs no change:
+// - a dead primary is replaced by the first live in-sync node (epoch + 1);
+//   with none, the placement stays (the collection takes no writes until
+//   one of its in-sync nodes returns);
+// - dead nodes leave the in-sync set (they stay replicas and catch up when
+//   they return);
+// - while fewer than replication_factor replicas are live, live nodes that
+//   hold no copy join as replicas (not in sync: they copy the collection).
+std::optional<internal::Placement> Repaired(const std::string& collection, const internal::Placement& current,
+                                            const LiveNodes& live, size_t replication_factor);
+
+// Whether `node` is in the placement's in-sync set.
+bool InSync(const internal::Placement& placement, const std::string& node);
+
+}  // namespace lmd::server::cluster

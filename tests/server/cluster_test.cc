@@ -1,0 +1,144 @@
+// Replicated collections end to end: a real etcd and three lmdd nodes in this
+// process, on loopback. The kill -9, SIGSTOP and etcd-member checks run
+// against separate processes in deploy/test-replication.sh.
+#include <chrono>
+#include <set>
+#include <thread>
+
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include "tests/server/etcd_process.h"
+#include "tests/server/test_server.h"
+
+namespace lmd::testing {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class ClusterTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    Result<std::unique_ptr<EtcdCluster>> etcd = EtcdCluster::Start(1);
+    ASSERT_TRUE(etcd.ok()) << etcd.status().ToString();
+    etcd_ = std::move(etcd).value();
+    for (int i = 0; i < 3; ++i) ports_.push_back(UnusedLoopbackPort());
+    for (int i = 0; i < 3; ++i) dirs_.push_back(std::make_unique<TempDir>());
+    nodes_.resize(3);
+    for (int i = 0; i < 3; ++i) StartNode(i);
+  }
+
+  void StartNode(int i) {
+    server::ServerConfig config;
+    config.listen = Address(i);
+    config.data_dir = dirs_[i]->path();
+    config.cluster_etcd = etcd_->endpoint(0);
+    config.cluster_node_id = "n" + std::to_string(i);
+    config.cluster_lease_ttl_s = 1;
+    config.cluster_replicate_timeout_ms = 500;
+    Result<std::unique_ptr<server::LmdServer>> started = server::LmdServer::Start(config);
+    ASSERT_TRUE(started.ok()) << started.status().ToString();
+    nodes_[i] = std::move(started).value();
+  }
+
+  std::string Address(int i) const { return "127.0.0.1:" + std::to_string(ports_[i]); }
+  std::unique_ptr<client::LmdClient> ClientOf(int i) const {
+    client::ClientOptions options;
+    options.target = Address(i);
+    return client::LmdClient::Create(options).value();
+  }
+
+  // The write acknowledged by any node, tried in turn for up to 10 s.
+  bool Insert(const std::string& id, int first_node) {
+    const auto give_up = Clock::now() + std::chrono::seconds(10);
+    for (int attempt = 0; Clock::now() < give_up; ++attempt) {
+      const int i = (first_node + attempt) % 3;
+      if (!nodes_[i]) continue;
+      auto stub = v1::LmdService::NewStub(grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials()));
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(3));
+      v1::InsertMapsResponse response;
+      if (stub->InsertMaps(&context, OneMapRequest("site", id, SquareRoomMap(12 + attempt % 4)), &response).ok()) {
+        return true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  }
+
+  // The map ids node i's own copy holds.
+  std::set<std::string> Held(int i) const {
+    auto stub = v1::LmdService::NewStub(grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials()));
+    grpc::ClientContext context;
+    context.AddMetadata("lmd-local", "1");
+    v1::ListMapsRequest request;
+    request.set_collection("site");
+    request.set_page_size(1000);
+    v1::ListMapsResponse response;
+    std::set<std::string> ids;
+    if (!stub->ListMaps(&context, request, &response).ok()) return ids;
+    for (const v1::MapMetadata& m : response.maps()) ids.insert(m.map_id());
+    return ids;
+  }
+
+  std::unique_ptr<EtcdCluster> etcd_;
+  std::vector<int> ports_;
+  std::vector<std::unique_ptr<TempDir>> dirs_;
+  std::vector<std::unique_ptr<server::LmdServer>> nodes_;
+};
+
+TEST_F(ClusterTest, EveryAcknowledgedWriteIsOnEveryCopyAndOutlivesItsPrimary) {
+  std::set<std::string> acked;
+  for (int k = 0; k < 8; ++k) {
+    const std::string id = "a" + std::to_string(k);
+    ASSERT_TRUE(Insert(id, 1)) << id;  // node 1 takes the first write: it becomes the primary
+    acked.insert(id);
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(Held(i), acked) << "node " << i;
+
+  nodes_[1]->Shutdown(std::chrono::milliseconds(0));  // leaves the cluster: a copy is promoted
+  nodes_[1].reset();
+  for (int k = 0; k < 8; ++k) {
+    const std::string id = "b" + std::to_string(k);
+    ASSERT_TRUE(Insert(id, 0)) << id;
+    acked.insert(id);
+  }
+  EXPECT_EQ(Held(0), acked);
+  EXPECT_EQ(Held(2), acked);
+
+  v1::ClusterResponse cluster;
+  ASSERT_TRUE(ClientOf(0)->Cluster(&cluster).ok());
+  ASSERT_EQ(cluster.placements_size(), 1);
+  EXPECT_EQ(cluster.placements(0).epoch(), 2u);
+
+  StartNode(1);  // back on its old store: it catches up, then holds every write again
+  const auto give_up = Clock::now() + std::chrono::seconds(10);
+  while (Held(1) != acked && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(Held(1), acked);
+}
+
+TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
+  ASSERT_TRUE(Insert("m1", 2));
+  // Every node answers reads and writes for the collection, whichever is its primary.
+  for (int i = 0; i < 3; ++i) {
+    auto client = ClientOf(i);
+    v1::GetMapRequest get;
+    get.set_collection("site");
+    get.set_map_id("m1");
+    v1::GetMapResponse got;
+    EXPECT_TRUE(client->GetMap(get, &got).ok()) << "node " << i;
+    v1::RetrieveRequest retrieve;
+    retrieve.set_collection("site");
+    *retrieve.mutable_map() = SquareRoomMap(12);
+    v1::RetrieveResponse answer;
+    EXPECT_TRUE(client->Retrieve(retrieve, &answer).ok()) << "node " << i;
+  }
+  TempDir alone_dir;
+  TestServer alone(alone_dir.path());
+  v1::ClusterResponse cluster;
+  ASSERT_TRUE(alone.client().Cluster(&cluster).ok());
+  EXPECT_FALSE(cluster.enabled());
+}
+
+}  // namespace
+}  // namespace lmd::testing
