@@ -103,6 +103,7 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   node->watcher_ = node->etcd_->WatchPrefix(node->prefix_ + "/", state->revision + 1,
                                             [self](const WatchBatch& batch) { self->OnWatch(batch); });
   node->maintenance_ = std::thread([self] { self->Maintain(); });
+  node->catching_up_ = std::thread([self] { self->CatchUpLoop(); });
   spdlog::info("cluster: node {} joined ({} live nodes, {} placements, etcd {})", node->node_id_,
                node->live_.size(), node->placements_.size(), config.cluster_etcd);
   return node;
@@ -121,6 +122,7 @@ void ClusterNode::Stop() {
   }
   wake_cv_.notify_all();
   if (maintenance_.joinable()) maintenance_.join();
+  if (catching_up_.joinable()) catching_up_.join();
   watcher_.reset();
   std::unique_ptr<LeaseKeeper> keeper;
   {
@@ -226,6 +228,19 @@ void ClusterNode::Maintain() {
       continue;
     }
     RunController();
+  }
+}
+
+// Apart from the controller's thread: copying a large collection takes
+// minutes, and failovers must not wait for it.
+void ClusterNode::CatchUpLoop() {
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      wake_cv_.wait_for(lock, kMaintainEvery, [&] { return stopping_; });
+      if (stopping_) return;
+      if (fenced_) continue;
+    }
     CatchUpAll();
   }
 }

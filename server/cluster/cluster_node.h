@@ -14,8 +14,8 @@
 // writes of an older epoch, so a primary that was cut off cannot get a write
 // acknowledged after its successor took over.
 //
-// Thread-safe. Its threads: the etcd lease keeper and watcher, and one
-// maintenance thread (controller duties, catch-up, re-registration).
+// Thread-safe. Its threads: the etcd lease keeper and watcher, one for
+// registration and controller duties, one for catching up.
 #pragma once
 
 #include <atomic>
@@ -108,6 +108,7 @@ class ClusterNode {
   Status Register();
   void OnWatch(const WatchBatch& batch);
   void Maintain();
+  void CatchUpLoop();
   void RunController();
   void CatchUpAll();
   Status CatchUp(const std::string& collection, const internal::Placement& placement);
@@ -155,7 +156,8 @@ class ClusterNode {
   mutable std::map<std::string, std::shared_ptr<internal::Replica::Stub>> stubs_;
 
   std::unique_ptr<PrefixWatcher> watcher_;
-  std::thread maintenance_;
+  std::thread maintenance_;  // registration and controller duties
+  std::thread catching_up_;  // this node's copies that are not in sync
 };
 
 }  // namespace lmd::server::cluster
