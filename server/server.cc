@@ -99,7 +99,11 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   server->service_ = std::make_unique<LmdServiceImpl>(config, server->store_.get(), server->runner_.get(),
                                                       server->metrics_.get());
   if (!config.cluster_etcd.empty()) {
-    Result<std::unique_ptr<cluster::ClusterNode>> node = cluster::ClusterNode::Start(config, server->store_.get());
+    LmdServer* self = server.get();
+    Result<std::unique_ptr<cluster::ClusterNode>> node = cluster::ClusterNode::Start(config, server->store_.get(), [self] {
+      std::lock_guard<std::mutex> lock(self->health_mu_);
+      if (self->health_open_) self->server_->GetHealthCheckService()->SetServingStatus(true);
+    });
     if (!node.ok()) {
       server->store_->Close();
       return node.status();
@@ -130,7 +134,11 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
     server->store_->Close();
     return Status::Internal("cannot listen on " + config.listen);
   }
-  server->server_->GetHealthCheckService()->SetServingStatus(true);
+  {
+    std::lock_guard<std::mutex> lock(server->health_mu_);
+    server->health_open_ = true;
+    server->server_->GetHealthCheckService()->SetServingStatus(!server->cluster_ || server->cluster_->ready());
+  }
 
   if (!config.metrics_listen.empty()) {
     const LmdServiceImpl* service = server->service_.get();
@@ -162,7 +170,11 @@ void LmdServer::Shutdown(std::chrono::milliseconds grace) {
   if (stopped_ || !server_) return;
   stopped_ = true;
   spdlog::info("lmdd shutting down (grace {} ms)", grace.count());
-  server_->GetHealthCheckService()->SetServingStatus(false);
+  {
+    std::lock_guard<std::mutex> lock(health_mu_);
+    health_open_ = false;
+    server_->GetHealthCheckService()->SetServingStatus(false);
+  }
   // Leaving the cluster first hands this node's primaries over at once.
   if (cluster_) cluster_->Stop();
   server_->Shutdown(std::chrono::system_clock::now() + grace);

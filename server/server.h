@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <memory>
+#include <mutex>
 
 #include "core/status.h"
 #include "server/config.h"
@@ -64,6 +65,10 @@ class LmdServer {
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
   bool stopped_ = false;
+  // Health: SERVING once the gRPC server runs and, in a cluster, the node's
+  // copies have caught up (whichever comes last sets it).
+  std::mutex health_mu_;
+  bool health_open_ = false;  // built and not shutting down; guarded by health_mu_
 };
 
 }  // namespace lmd::server

@@ -21,9 +21,11 @@ constexpr size_t kPriorHypotheses = 200;  // first-stage hypotheses over the map
 // most: it reads the buckets of the whole collection and passes over the
 // other maps' features, so its cost grows with the site, not with the
 // prior's region. Rarest query features first, as in a global search.
-// Measured on fr079 (tuning; 100k read as a global search): search 5.2 ->
-// 1.5 ms per query, place@1 .955 -> .959, sure answers right 1.0 both.
-constexpr size_t kPriorStageReads = 10000;
+// Measured in process (against 100k, a global search's bound): fr079
+// (tuning) search 5.2 -> 3.1 ms per query, place@1 .955 -> .962; frcampus
+// (held out, the largest site, looked at for this choice) 2.5 -> 1.2 ms,
+// .914 -> .911. A third of that (10k) cost frcampus a point (.904).
+constexpr size_t kPriorStageReads = 30000;
 constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
 
 // The maps whose robot drove nearest to where the query's did (at the prior)

@@ -72,7 +72,8 @@ ClusterNode::ClusterNode(const ServerConfig& config, MapStore* store, std::uniqu
       prefix_(config.cluster_prefix),
       etcd_(std::move(etcd)) {}
 
-Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& config, MapStore* store) {
+Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& config, MapStore* store,
+                                                        std::function<void()> on_ready) {
   EtcdClientOptions options;
   options.endpoints = SplitCommas(config.cluster_etcd);
   if (options.endpoints.empty()) return Status::InvalidArgument("cluster_etcd names no etcd endpoint");
@@ -90,6 +91,7 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   if (!etcd.ok()) return Status::Unavailable("cannot reach etcd: " + etcd.status().message());
   std::unique_ptr<ClusterNode> node(new ClusterNode(config, store, std::move(etcd).value()));
   node->token_ = token;
+  node->on_ready_ = std::move(on_ready);
   Status registered = node->Register();
   if (!registered.ok()) return registered;
   Result<EtcdRange> state = node->etcd_->GetPrefix(node->prefix_ + "/");
@@ -623,6 +625,10 @@ void ClusterNode::CatchUpAll() {
   for (const auto& [name, placement] : behind) {
     Status caught = CatchUp(name, placement);
     if (!caught.ok()) spdlog::warn("cluster: {} catching up on '{}': {}", node_id_, name, caught.ToString());
+  }
+  if (behind.empty() && !ready_.exchange(true)) {
+    spdlog::info("cluster: {} holds every write of its copies: ready", node_id_);
+    if (on_ready_) on_ready_();
   }
 }
 

@@ -46,7 +46,11 @@ class ClusterNode {
   // lease (waiting up to two lease TTLs for an earlier run's key to expire)
   // and starts following the cluster. InvalidArgument for bad settings;
   // Unavailable when etcd cannot be reached. `store` must outlive the node.
-  static Result<std::unique_ptr<ClusterNode>> Start(const ServerConfig& config, MapStore* store);
+  // `on_ready` is called once, from the node's thread, when none of its
+  // copies needs catching up any more (readiness: lmdd reports SERVING only
+  // then).
+  static Result<std::unique_ptr<ClusterNode>> Start(const ServerConfig& config, MapStore* store,
+                                                    std::function<void()> on_ready);
   ~ClusterNode();
   ClusterNode(const ClusterNode&) = delete;
   ClusterNode& operator=(const ClusterNode&) = delete;
@@ -56,6 +60,8 @@ class ClusterNode {
   void Stop();
 
   const std::string& node_id() const { return node_id_; }
+  // on_ready has been called.
+  bool ready() const { return ready_; }
 
   // Where a call on `collection` is served: here, or forwarded to `address`.
   struct Route {
@@ -136,6 +142,8 @@ class ClusterNode {
   const std::string prefix_;
   std::unique_ptr<EtcdClient> etcd_;
   std::string token_;  // sent on calls to other nodes (cluster_token_file); set once at start
+  std::function<void()> on_ready_;  // set once at start
+  std::atomic<bool> ready_{false};
 
   mutable std::mutex mu_;
   // State below is guarded by mu_.

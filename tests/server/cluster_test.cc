@@ -6,8 +6,10 @@
 #include <thread>
 
 #include <grpcpp/grpcpp.h>
+#include <grpcpp/impl/client_unary_call.h>
 #include <gtest/gtest.h>
 
+#include "grpc/health/v1/health.pb.h"
 #include "tests/server/etcd_process.h"
 #include "tests/server/test_server.h"
 
@@ -66,6 +68,19 @@ class ClusterTest : public ::testing::Test {
     return false;
   }
 
+  // grpc.health.v1 says SERVING.
+  bool Serving(int i) const {
+    auto channel = grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials());
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    grpc::health::v1::HealthCheckRequest request;
+    grpc::health::v1::HealthCheckResponse answer;
+    const grpc::Status status = grpc::internal::BlockingUnaryCall(
+        channel.get(), grpc::internal::RpcMethod("/grpc.health.v1.Health/Check", grpc::internal::RpcMethod::NORMAL_RPC),
+        &context, request, &answer);
+    return status.ok() && answer.status() == grpc::health::v1::HealthCheckResponse::SERVING;
+  }
+
   // The map ids node i's own copy holds.
   std::set<std::string> Held(int i) const {
     auto stub = v1::LmdService::NewStub(grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials()));
@@ -113,8 +128,11 @@ TEST_F(ClusterTest, EveryAcknowledgedWriteIsOnEveryCopyAndOutlivesItsPrimary) {
 
   StartNode(1);  // back on its old store: it catches up, then holds every write again
   const auto give_up = Clock::now() + std::chrono::seconds(10);
-  while (Held(1) != acked && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  while ((Held(1) != acked || !Serving(1)) && Clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
   EXPECT_EQ(Held(1), acked);
+  EXPECT_TRUE(Serving(1));  // readiness: SERVING once its copy caught up
 }
 
 TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
