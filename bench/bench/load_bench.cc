@@ -181,6 +181,9 @@ struct FleetRobot {
   // Outcomes, over its answered DetectChanges.
   size_t asked = 0, right = 0, sure = 0, sure_wrong = 0, sure_unposed = 0, by_prior = 0, by_sequence = 0,
          fell_back = 0;
+  // Sure and wrong, by how it was asked, and those off by less than 1 m
+  // (the right place at a slightly wrong pose).
+  size_t wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
 };
 
 constexpr size_t kSequenceStepTicks = 3;
@@ -225,7 +228,11 @@ void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& respo
                      std::abs(std::remainder(got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
   robot->right += right;
   robot->sure += verdict.localized();
-  robot->sure_wrong += verdict.localized() && posed && !right;
+  const bool sure_wrong = verdict.localized() && posed && !right;
+  robot->sure_wrong += sure_wrong;
+  robot->wrong_by_prior += sure_wrong && verdict.prior_used() && !verdict.fell_back_to_global();
+  robot->wrong_by_sequence += sure_wrong && verdict.sequence_maps() > 0;
+  robot->wrong_within_1m += sure_wrong && std::hypot(got.x - truth.x, got.y - truth.y) < 1.0;
   robot->sure_unposed += verdict.localized() && !posed;  // its top hit's map is not anchored
   robot->lost = !(verdict.localized() && posed);
   if (!robot->lost) robot->fix = got, robot->fixed_at = t;
@@ -236,13 +243,16 @@ void PrintFleet(const std::vector<FleetRobot>& fleet) {
   for (const FleetRobot& r : fleet) {
     all.asked += r.asked, all.right += r.right, all.sure += r.sure, all.sure_wrong += r.sure_wrong;
     all.sure_unposed += r.sure_unposed;
+    all.wrong_by_prior += r.wrong_by_prior, all.wrong_by_sequence += r.wrong_by_sequence;
+    all.wrong_within_1m += r.wrong_within_1m;
     all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.fell_back += r.fell_back;
   }
   const double n = std::max<double>(1.0, static_cast<double>(all.asked));
   std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg), sure %zu (%.3f), "
-              "sure and wrong %zu, sure without a site pose %zu; by prior %zu, prior failed and answered globally %zu, "
-              "by sequence %zu, global %zu\n",
-              all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.sure_unposed,
+              "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
+              "%zu; by prior %zu, prior failed and answered globally %zu, by sequence %zu, global %zu\n",
+              all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
+              all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed,
               all.by_prior, all.fell_back,
               all.by_sequence, all.asked - all.by_prior - all.fell_back - all.by_sequence);
 }
