@@ -15,7 +15,7 @@
 # Ends with one line: PASS, or FAIL: <why> (exit 1).
 # Run: bash deploy/test-replication.sh   (~4 min once built; installs etcd and
 # the build packages through scripts/setup.sh). Env: LMD_BUILD_DIR,
-# LMD_REPL_BASE_PORT (default 52300: it and the next 20 ports are used).
+# LMD_REPL_BASE_PORT (default 52300: it and the next 30 ports are used).
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -66,7 +66,7 @@ ETCDCTL_API=3 etcdctl --endpoints "$endpoints" endpoint health >/dev/null 2>&1 |
 log "etcd $(etcd --version | head -1 | awk '{print $3}'): 3 members on $endpoints"
 
 # --- lmdd nodes ------------------------------------------------------------------
-node_addr() { echo "127.0.0.1:$((base + 3 + $1))"; }       # nodes 1..4
+node_addr() { echo "127.0.0.1:$((base + 20 + $1))"; }      # nodes 1..7
 start_node() {
   local n=$1
   "$lmdd_bin" --listen "$(node_addr "$n")" --data-dir "$work/n$n" --log-level warn \
@@ -198,7 +198,35 @@ answer=$("$lmdctl_bin" --server "$(node_addr 4)" query --collection kill1 --file
   || fail "node n4 did not answer a query"
 log "node n4, which holds no copy of kill1, answered a get, a list and a query (forwarded): $(echo "$answer" | head -1)"
 
-# --- 6. insert throughput ------------------------------------------------------------
+# --- 6. TLS and tokens between nodes ---------------------------------------------------
+bash "$root/deploy/make-dev-secrets.sh" "$work/secrets" >/dev/null
+sec=$work/secrets
+for n in 6 7; do
+  "$lmdd_bin" --listen "$(node_addr "$n")" --data-dir "$work/n$n" --log-level warn \
+    --set cluster_etcd="$endpoints" --set cluster_node_id="s$n" --set cluster_prefix=/lmd-tls \
+    --set tls_cert_file="$sec/tls.crt" --set tls_key_file="$sec/tls.key" --set tokens_file="$sec/tokens" \
+    --set cluster_tls_ca_file="$sec/ca.crt" --set cluster_token_file="$sec/admin.token" >>"$work/n$n.log" 2>&1 &
+  pids[n$n]=$!
+done
+secure=(--tls-ca "$sec/ca.crt" --token "$(cat "$sec/admin.token")")
+for _ in $(seq 100); do
+  "$lmdctl_bin" --server "$(node_addr 7)" "${secure[@]}" cluster >/dev/null 2>&1 && break
+  sleep 0.1
+done
+"$lmdctl_bin" --server "$(node_addr 6)" "${secure[@]}" insert --collection secure --file "$work/q.points" --id s1 >/dev/null \
+  || fail "insert into the TLS cluster: $(tail -n 3 "$work/n6.log")"
+"$lmdctl_bin" --server "$(node_addr 7)" "${secure[@]}" get --collection secure --id s1 >/dev/null \
+  || fail "get from the TLS cluster's other node"
+copies=$("$lmdctl_bin" --server "$(node_addr 7)" "${secure[@]}" cluster --json | $py -c "
+import json,sys
+p=[p for p in json.load(sys.stdin)['placements'] if p['collection']=='secure'][0]
+print(sum(1 for c in p['copies'] if c.get('in_sync') and int(c.get('seq','0'))==1))")
+[ "$copies" = 2 ] || fail "the TLS cluster holds the write on $copies copies, not 2"
+"$lmdctl_bin" --server "$(node_addr 7)" --tls-ca "$sec/ca.crt" get --collection secure --id s1 >/dev/null 2>&1 \
+  && fail "the TLS cluster answered a call without a token"
+log "two nodes with TLS and tokens: a write to s6 on both copies over TLS, read through s7; no token, no answer"
+
+# --- 7. insert throughput ------------------------------------------------------------
 "$lmdd_bin" --listen "$(node_addr 5)" --data-dir "$work/alone" --log-level warn >"$work/alone.log" 2>&1 &
 pids[alone]=$!
 sleep 1

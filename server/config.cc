@@ -100,6 +100,8 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "cluster_zone") { config->cluster_zone = value; return Status::Ok(); }
   if (key == "cluster_prefix") { config->cluster_prefix = value; return Status::Ok(); }
   if (key == "cluster_token_file") { config->cluster_token_file = value; return Status::Ok(); }
+  if (key == "cluster_tls_ca_file") { config->cluster_tls_ca_file = value; return Status::Ok(); }
+  if (key == "cluster_tls_server_name") { config->cluster_tls_server_name = value; return Status::Ok(); }
   if (key == "cluster_replication_factor") return SetUnsigned(key, value, &config->cluster_replication_factor, 1);
   if (key == "cluster_lease_ttl_s") return SetUnsigned(key, value, &config->cluster_lease_ttl_s, 1);
   if (key == "cluster_replicate_timeout_ms") return SetUnsigned(key, value, &config->cluster_replicate_timeout_ms, 1);

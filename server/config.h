@@ -136,6 +136,11 @@ struct ServerConfig {
   // With tokens_file: a file holding the token (first line) this node sends
   // on calls to other nodes; it needs write access to every collection ("*").
   std::string cluster_token_file;
+  // With TLS (tls_cert_file), nodes call each other over TLS with their own
+  // certificate and key, trusting this CA (default: tls_client_ca_file); the
+  // name other nodes' certificates are checked for, when not their address.
+  std::string cluster_tls_ca_file;
+  std::string cluster_tls_server_name;
 };
 
 // Reads "key = value" lines ('#' starts a comment; keys are the field names

@@ -72,11 +72,11 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
                                         grpc::Status (v1::LmdService::Stub::*method)(grpc::ClientContext*,
                                                                                     const Request&, Response*),
                                         const Request& request, Response* response) {
-    if (cluster_ == nullptr || (!write && cluster::Forwarder::WantsLocal(context))) return std::nullopt;
+    if (cluster_ == nullptr || (!write && cluster::WantsLocal(context))) return std::nullopt;
     Result<cluster::ClusterNode::Route> route = write ? cluster_->ForWrite(collection) : cluster_->ForRead(collection);
     if (!route.ok()) return route.status();
     if (route->here) return std::nullopt;
-    return forwarder_.Forward(route->address, context, method, request, response);
+    return cluster::Forward(cluster_->ChannelTo(route->address), context, method, request, response);
   }
 
   // What lmdd computes from `map` (the default method's preparation, and
@@ -138,7 +138,6 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   mutable PreparedMapCache prepared_;
   mutable RecentFixes fixes_;
   cluster::ClusterNode* cluster_ = nullptr;
-  cluster::Forwarder forwarder_;
 };
 
 }  // namespace lmd::server

@@ -80,6 +80,24 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   if (config.cluster_prefix.empty() || config.cluster_prefix.back() == '/') {
     return Status::InvalidArgument("cluster_prefix must be non-empty and not end with '/'");
   }
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!config.tls_cert_file.empty()) {  // nodes speak TLS to each other, with their own certificate
+    auto read = [](const std::string& path, std::string* out) {
+      std::ifstream in(path);
+      std::ostringstream text;
+      text << in.rdbuf();
+      *out = text.str();
+      return static_cast<bool>(in) && !out->empty();
+    };
+    grpc::SslCredentialsOptions tls;
+    const std::string ca = !config.cluster_tls_ca_file.empty() ? config.cluster_tls_ca_file : config.tls_client_ca_file;
+    if (ca.empty()) return Status::InvalidArgument("with TLS, a cluster needs cluster_tls_ca_file (the CA of the nodes' certificates)");
+    if (!read(ca, &tls.pem_root_certs) || !read(config.tls_cert_file, &tls.pem_cert_chain) ||
+        !read(config.tls_key_file, &tls.pem_private_key)) {
+      return Status::InvalidArgument("cannot read the cluster's TLS files (" + ca + ", tls_cert_file, tls_key_file)");
+    }
+    credentials = grpc::SslCredentials(tls);
+  }
   std::string token;
   if (!config.cluster_token_file.empty()) {
     std::ifstream in(config.cluster_token_file);
@@ -91,6 +109,8 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   if (!etcd.ok()) return Status::Unavailable("cannot reach etcd: " + etcd.status().message());
   std::unique_ptr<ClusterNode> node(new ClusterNode(config, store, std::move(etcd).value()));
   node->token_ = token;
+  node->credentials_ = credentials;
+  node->tls_server_name_ = config.cluster_tls_server_name;
   node->on_ready_ = std::move(on_ready);
   Status registered = node->Register();
   if (!registered.ok()) return registered;
@@ -299,11 +319,21 @@ std::string ClusterNode::AddressOf(const std::string& node) const {
   return it == live_.end() ? std::string() : it->second.address();
 }
 
-std::shared_ptr<internal::Replica::Stub> ClusterNode::StubFor(const std::string& address) const {
+std::shared_ptr<grpc::Channel> ClusterNode::ChannelTo(const std::string& address) const {
   std::lock_guard<std::mutex> lock(mu_);
-  std::shared_ptr<internal::Replica::Stub>& stub = stubs_[address];
-  if (!stub) stub = internal::Replica::NewStub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
-  return stub;
+  std::shared_ptr<grpc::Channel>& channel = channels_[address];
+  if (!channel) {
+    grpc::ChannelArguments args;
+    args.SetMaxReceiveMessageSize(-1);  // a copied map is as large as lmdd accepts
+    args.SetMaxSendMessageSize(-1);
+    if (!tls_server_name_.empty()) args.SetSslTargetNameOverride(tls_server_name_);
+    channel = grpc::CreateCustomChannel(address, credentials_, args);
+  }
+  return channel;
+}
+
+std::shared_ptr<internal::Replica::Stub> ClusterNode::StubFor(const std::string& address) const {
+  return internal::Replica::NewStub(ChannelTo(address));
 }
 
 Result<ClusterNode::Route> ClusterNode::ForWrite(const std::string& collection) {

@@ -29,6 +29,9 @@
 #include <thread>
 #include <vector>
 
+#include <grpcpp/channel.h>
+#include <grpcpp/security/credentials.h>
+
 #include "core/status.h"
 #include "lmd/internal/cluster.grpc.pb.h"
 #include "lmd/v1/lmd.pb.h"
@@ -97,6 +100,10 @@ class ClusterNode {
   // Nodes and placements as this node sees them, with each copy's lag.
   void Describe(v1::ClusterResponse* out) const;
 
+  // The channel to another node (TLS with this node's certificate when lmdd
+  // serves TLS), shared by every call there.
+  std::shared_ptr<grpc::Channel> ChannelTo(const std::string& address) const;
+
  private:
   struct Placed {
     internal::Placement placement;
@@ -161,7 +168,9 @@ class ClusterNode {
   bool wake_ = false;
   std::condition_variable wake_cv_;
   std::map<std::string, std::unique_ptr<Writer>> writers_;
-  mutable std::map<std::string, std::shared_ptr<internal::Replica::Stub>> stubs_;
+  mutable std::map<std::string, std::shared_ptr<grpc::Channel>> channels_;
+  std::shared_ptr<grpc::ChannelCredentials> credentials_;  // set once at start
+  std::string tls_server_name_;                            // set once at start
 
   std::unique_ptr<PrefixWatcher> watcher_;
   std::thread maintenance_;  // registration and controller duties
