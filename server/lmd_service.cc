@@ -200,7 +200,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DeleteMap(grpc::CallbackServerContext*
     Status status = ValidateKey(request->collection(), request->map_id());
     if (!status.ok()) return status;
     if (auto elsewhere = ServedElsewhere(true, request->collection(), context, &v1::LmdService::Stub::DeleteMap,
-                                         *request, response)) {
+                                         *request, response, /*create=*/false)) {
       return *elsewhere;
     }
     if (cluster_ != nullptr) return cluster_->Delete(request->collection(), request->map_id());

@@ -66,14 +66,16 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   // In a cluster, when another node serves `collection` (a write: its
   // primary; a read: any in-sync copy): the call forwarded there, with its
   // status. Nothing when the call is served here (always, without a cluster).
+  // A write to a collection not placed yet places it only when `create`.
   template <typename Request, typename Response>
   std::optional<Status> ServedElsewhere(bool write, const std::string& collection,
                                         const grpc::CallbackServerContext* context,
                                         grpc::Status (v1::LmdService::Stub::*method)(grpc::ClientContext*,
                                                                                     const Request&, Response*),
-                                        const Request& request, Response* response) {
+                                        const Request& request, Response* response, bool create = true) {
     if (cluster_ == nullptr || (!write && cluster::WantsLocal(context))) return std::nullopt;
-    Result<cluster::ClusterNode::Route> route = write ? cluster_->ForWrite(collection) : cluster_->ForRead(collection);
+    Result<cluster::ClusterNode::Route> route =
+        write ? cluster_->ForWrite(collection, create) : cluster_->ForRead(collection);
     if (!route.ok()) return route.status();
     if (route->here) return std::nullopt;
     return cluster::Forward(cluster_->ChannelTo(route->address), context, method, request, response);

@@ -121,13 +121,13 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   initial.revision = state->revision;
   for (const EtcdKeyValue& kv : state->kvs) initial.events.push_back({WatchEvent::Type::kPut, kv.key, kv.value, kv.mod_revision});
   node->OnWatch(initial);
+  node->LeaveInSyncSets();
   ClusterNode* self = node.get();
   node->watcher_ = node->etcd_->WatchPrefix(node->prefix_ + "/", state->revision + 1,
                                             [self](const WatchBatch& batch) { self->OnWatch(batch); });
   node->maintenance_ = std::thread([self] { self->Maintain(); });
   node->catching_up_ = std::thread([self] { self->CatchUpLoop(); });
-  spdlog::info("cluster: node {} joined ({} live nodes, {} placements, etcd {})", node->node_id_,
-               node->live_.size(), node->placements_.size(), config.cluster_etcd);
+  spdlog::info("cluster: node {} joined (etcd {})", node->node_id_, config.cluster_etcd);
   return node;
 }
 
@@ -141,8 +141,15 @@ void ClusterNode::Stop() {
     stopping_ = true;
     fenced_ = true;
     lease = lease_id_;
+    if (catch_up_call_ != nullptr) catch_up_call_->TryCancel();
   }
   wake_cv_.notify_all();
+  // The lease first: this node's primaries move now, not once the threads
+  // below have finished what they are doing.
+  if (lease != 0) {
+    Status revoked = etcd_->RevokeLease(lease);
+    if (!revoked.ok()) spdlog::warn("cluster: revoking the lease of {}: {}", node_id_, revoked.ToString());
+  }
   if (maintenance_.joinable()) maintenance_.join();
   if (catching_up_.joinable()) catching_up_.join();
   watcher_.reset();
@@ -150,12 +157,11 @@ void ClusterNode::Stop() {
   {
     std::lock_guard<std::mutex> lock(mu_);
     keeper = std::move(keeper_);
+    if (lease_id_ != lease && lease_id_ != 0) lease = lease_id_;  // registered again meanwhile
+    else lease = 0;
   }
   keeper.reset();
-  if (lease != 0) {
-    Status revoked = etcd_->RevokeLease(lease);
-    if (!revoked.ok()) spdlog::warn("cluster: revoking the lease of {}: {}", node_id_, revoked.ToString());
-  }
+  if (lease != 0) etcd_->RevokeLease(lease);
 }
 
 // A new lease and this node's key on it. The key of an earlier run of the
@@ -173,6 +179,10 @@ Status ClusterNode::Register() {
     Result<bool> put = etcd_->PutIfRevision(Key("nodes", node_id_), record.SerializeAsString(), 0, lease->id);
     if (!put.ok()) return put.status();
     if (*put) break;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stopping_) return Status::Cancelled("node " + node_id_ + " is stopping");
+    }
     if (Clock::now() > give_up) {
       return Status::FailedPrecondition("node id '" + node_id_ + "' is registered by a live node (cluster_node_id)");
     }
@@ -192,7 +202,7 @@ Status ClusterNode::Register() {
   std::lock_guard<std::mutex> lock(mu_);
   lease_id_ = lease->id;
   keeper_ = std::move(keeper);
-  fenced_ = false;
+  fenced_ = stopping_;
   return Status::Ok();
 }
 
@@ -216,7 +226,8 @@ void ClusterNode::OnWatch(const WatchBatch& batch) {
         Placed placed;
         if (put && placed.placement.ParseFromString(e.value)) {
           placed.revision = e.mod_revision;
-          placements_[name] = placed;
+          const auto it = placements_.find(name);  // a CAS of this node's may have cached a newer one
+          if (it == placements_.end() || it->second.revision <= placed.revision) placements_[name] = placed;
         }
         if (!put) placements_.erase(name);
       } else if (e.key == prefix_ + "/controller" && !put) {
@@ -336,7 +347,7 @@ std::shared_ptr<internal::Replica::Stub> ClusterNode::StubFor(const std::string&
   return internal::Replica::NewStub(ChannelTo(address));
 }
 
-Result<ClusterNode::Route> ClusterNode::ForWrite(const std::string& collection) {
+Result<ClusterNode::Route> ClusterNode::ForWrite(const std::string& collection, bool create) {
   for (int attempt = 0; attempt < 3; ++attempt) {
     internal::Placement fresh;
     {
@@ -355,21 +366,16 @@ Result<ClusterNode::Route> ClusterNode::ForWrite(const std::string& collection) 
         }
         return Route{false, address};
       }
+      if (!create) return Status::NotFound("unknown collection '" + collection + "'");
       if (fenced_) return Status::Unavailable("node " + node_id_ + " lost its etcd lease; retry");
-      fresh = NewPlacement(collection, live_, node_id_, config_.cluster_replication_factor);
+      // Maps this node already holds (a single node's store joining a
+      // cluster): the other copies must copy them before they are in sync.
+      fresh = NewPlacement(collection, live_, node_id_, config_.cluster_replication_factor,
+                           /*others_in_sync=*/!store_->HasCollection(collection));
     }
     Result<bool> created = etcd_->PutIfRevision(Key("placement", collection), fresh.SerializeAsString(), 0);
     if (!created.ok()) return Status::Unavailable("placing collection '" + collection + "': " + created.status().message());
-    Result<std::optional<EtcdValue>> now = etcd_->Get(Key("placement", collection));
-    if (!now.ok()) return Status::Unavailable("reading the placement of '" + collection + "': " + now.status().message());
-    if (*now) {
-      Placed placed;
-      if (placed.placement.ParseFromString((*now)->value)) {
-        placed.revision = (*now)->mod_revision;
-        std::lock_guard<std::mutex> lock(mu_);
-        placements_[collection] = placed;
-      }
-    }
+    RefreshPlacement(collection);
     if (*created) spdlog::info("cluster: collection '{}' placed on {} copies, primary {}", collection, fresh.replicas_size(), node_id_);
   }
   return Status::Unavailable("the placement of collection '" + collection + "' keeps changing; retry");
@@ -388,68 +394,66 @@ Result<ClusterNode::Route> ClusterNode::ForRead(const std::string& collection) {
   return Route{false, address};
 }
 
-Status ClusterNode::Insert(const std::string& collection, std::vector<MapWrite>* maps, const InsertLimits& limits,
-                           std::vector<v1::MapMetadata>* evicted) {
+ReplicationMark ClusterNode::StartLog(Writer* writer, const std::string& collection, uint64_t epoch) {
+  const ReplicationMark mark = store_->MarkOf(collection);
+  // A log from an earlier term as primary, or one that missed writes taken
+  // as a follower since, would misjudge a joining copy: start anew.
+  if (!writer->log_started || writer->log_epoch != epoch || writer->log.last_seq() != mark.seq) {
+    writer->log.Reset(mark.epoch, mark.seq);
+    writer->log_started = true;
+    writer->log_epoch = epoch;
+  }
+  return mark;
+}
+
+Result<internal::Placement> ClusterNode::PlacementAsPrimary(const std::string& collection) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto it = placements_.find(collection);
+  if (fenced_ || it == placements_.end() || it->second.placement.primary() != node_id_) {
+    return Status::Unavailable("node " + node_id_ + " is not the primary of collection '" + collection + "'; retry");
+  }
+  return it->second.placement;
+}
+
+Status ClusterNode::WriteAsPrimary(const std::string& collection,
+                                   const std::function<Status(const ReplicationMark&, internal::ApplyRequest*)>& apply) {
   Writer& writer = WriterOf(collection);
   std::lock_guard<std::mutex> write_lock(writer.mu);
-  internal::Placement placement;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    const auto it = placements_.find(collection);
-    if (fenced_ || it == placements_.end() || it->second.placement.primary() != node_id_) {
-      return Status::Unavailable("node " + node_id_ + " is not the primary of collection '" + collection + "'; retry");
-    }
-    placement = it->second.placement;
-  }
-  const ReplicationMark last = store_->MarkOf(collection);
-  if (!writer.log_started) {
-    writer.log.Reset(last.epoch, last.seq);
-    writer.log_started = true;
-  }
-  const ReplicationMark mark{placement.epoch(), last.seq + 1};
-  std::vector<v1::MapMetadata> gone;
-  Status stored = store_->InsertMaps(maps, limits, &gone, &mark);
-  if (!stored.ok()) return stored;
+  Result<internal::Placement> placement = PlacementAsPrimary(collection);
+  if (!placement.ok()) return placement.status();
+  const ReplicationMark last = StartLog(&writer, collection, placement->epoch());
+  const ReplicationMark mark{placement->epoch(), last.seq + 1};
   internal::ApplyRequest write;
   write.set_collection(collection);
   write.set_epoch(mark.epoch);
   write.set_seq(mark.seq);
-  for (const MapWrite& m : *maps) *write.add_maps() = ToReplicated(m);
-  for (const v1::MapMetadata& meta : gone) write.add_deleted_map_ids(meta.map_id());
-  if (evicted != nullptr) evicted->insert(evicted->end(), gone.begin(), gone.end());
-  Status copied = Replicate(collection, placement, write);
+  write.set_prev_epoch(last.epoch);
+  Status applied = apply(mark, &write);
+  if (!applied.ok()) return applied;
+  Status copied = Replicate(collection, *placement, write);
   writer.log.Append(std::move(write));
   return copied;
 }
 
+Status ClusterNode::Insert(const std::string& collection, std::vector<MapWrite>* maps, const InsertLimits& limits,
+                           std::vector<v1::MapMetadata>* evicted) {
+  return WriteAsPrimary(collection, [&](const ReplicationMark& mark, internal::ApplyRequest* write) {
+    std::vector<v1::MapMetadata> gone;
+    Status stored = store_->InsertMaps(maps, limits, &gone, &mark);
+    if (!stored.ok()) return stored;
+    for (const MapWrite& m : *maps) *write->add_maps() = ToReplicated(m);
+    for (const v1::MapMetadata& meta : gone) write->add_deleted_map_ids(meta.map_id());
+    if (evicted != nullptr) evicted->insert(evicted->end(), gone.begin(), gone.end());
+    return Status::Ok();
+  });
+}
+
 Status ClusterNode::Delete(const std::string& collection, const std::string& map_id) {
-  Writer& writer = WriterOf(collection);
-  std::lock_guard<std::mutex> write_lock(writer.mu);
-  internal::Placement placement;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    const auto it = placements_.find(collection);
-    if (fenced_ || it == placements_.end() || it->second.placement.primary() != node_id_) {
-      return Status::Unavailable("node " + node_id_ + " is not the primary of collection '" + collection + "'; retry");
-    }
-    placement = it->second.placement;
-  }
-  const ReplicationMark last = store_->MarkOf(collection);
-  if (!writer.log_started) {
-    writer.log.Reset(last.epoch, last.seq);
-    writer.log_started = true;
-  }
-  const ReplicationMark mark{placement.epoch(), last.seq + 1};
-  Status deleted = store_->DeleteMap(collection, map_id, &mark);
-  if (!deleted.ok()) return deleted;
-  internal::ApplyRequest write;
-  write.set_collection(collection);
-  write.set_epoch(mark.epoch);
-  write.set_seq(mark.seq);
-  write.add_deleted_map_ids(map_id);
-  Status copied = Replicate(collection, placement, write);
-  writer.log.Append(std::move(write));
-  return copied;
+  return WriteAsPrimary(collection, [&](const ReplicationMark& mark, internal::ApplyRequest* write) {
+    Status deleted = store_->DeleteMap(collection, map_id, &mark);
+    if (deleted.ok()) write->add_deleted_map_ids(map_id);
+    return deleted;
+  });
 }
 
 Status ClusterNode::Replicate(const std::string& collection, const internal::Placement& placement,
@@ -514,12 +518,28 @@ Result<internal::Placement> ClusterNode::ChangePlacement(
     change(&p);
     Result<bool> swapped = etcd_->PutIfRevision(Key("placement", collection), p.SerializeAsString(), (*now)->mod_revision);
     if (!swapped.ok()) return swapped.status();
-    if (*swapped) return p;
+    if (*swapped) {
+      RefreshPlacement(collection);
+      return p;
+    }
   }
   return Status::Unavailable("the placement of '" + collection + "' keeps changing");
 }
 
+void ClusterNode::RefreshPlacement(const std::string& collection) {
+  Result<std::optional<EtcdValue>> now = etcd_->Get(Key("placement", collection));
+  if (!now.ok() || !*now) return;  // the watch brings it
+  Placed placed;
+  if (!placed.placement.ParseFromString((*now)->value)) return;
+  placed.revision = (*now)->mod_revision;
+  std::lock_guard<std::mutex> lock(mu_);
+  Placed& cached = placements_[collection];
+  if (placed.revision >= cached.revision) cached = placed;
+}
+
 Status ClusterNode::Apply(const internal::ApplyRequest& write, internal::ApplyResponse* response) {
+  Writer& writer = WriterOf(write.collection());  // one write of a collection at a time, here too
+  std::lock_guard<std::mutex> write_lock(writer.mu);
   {
     std::lock_guard<std::mutex> lock(mu_);
     const auto it = placements_.find(write.collection());
@@ -531,10 +551,19 @@ Status ClusterNode::Apply(const internal::ApplyRequest& write, internal::ApplyRe
   }
   const ReplicationMark last = store_->MarkOf(write.collection());
   response->set_applied_seq(last.seq);
-  if (write.seq() <= last.seq) return Status::Ok();  // a retry: applied already
-  if (write.seq() != last.seq + 1) {
-    return Status::FailedPrecondition("write " + std::to_string(write.seq()) + " of '" + write.collection() +
-                                      "' follows " + std::to_string(last.seq) + ": writes are missing");
+  // Two primaries may both reach this copy for a moment (the old one cut off
+  // before it learnt of its successor): a write is taken only on top of the
+  // very write its primary made before it.
+  if (write.epoch() < last.epoch) {
+    return Status::FailedPrecondition("write of epoch " + std::to_string(write.epoch()) + " refused: this copy of '" +
+                                      write.collection() + "' holds writes of epoch " + std::to_string(last.epoch));
+  }
+  if (write.seq() == last.seq && write.epoch() == last.epoch) return Status::Ok();  // a retry: applied already
+  if (write.seq() != last.seq + 1 || write.prev_epoch() != last.epoch) {
+    return Status::FailedPrecondition("write " + std::to_string(write.seq()) + " (epoch " +
+                                      std::to_string(write.epoch()) + ") of '" + write.collection() +
+                                      "' does not follow this copy's last, " + std::to_string(last.seq) + " (epoch " +
+                                      std::to_string(last.epoch) + "): copy needed");
   }
   const ReplicationMark mark{write.epoch(), write.seq()};
   std::vector<MapWrite> maps;
@@ -603,40 +632,87 @@ Status ClusterNode::Join(const internal::JoinRequest& request) {
   const std::string& collection = request.collection();
   Writer& writer = WriterOf(collection);
   std::lock_guard<std::mutex> write_lock(writer.mu);
+  Result<internal::Placement> placement = PlacementAsPrimary(collection);
+  if (!placement.ok()) return placement.status();
   std::string address;
   {
     std::lock_guard<std::mutex> lock(mu_);
-    const auto it = placements_.find(collection);
-    if (fenced_ || it == placements_.end() || it->second.placement.primary() != node_id_) {
-      return Status::Unavailable("node " + node_id_ + " is not the primary of collection '" + collection + "'");
-    }
     address = AddressOf(request.node_id());
   }
-  if (address.empty()) return Status::FailedPrecondition("node " + request.node_id() + " is not live");
-  if (!writer.log_started) {
-    const ReplicationMark mark = store_->MarkOf(collection);
-    writer.log.Reset(mark.epoch, mark.seq);
-    writer.log_started = true;
-  }
+  if (address.empty()) return Status::Unavailable("node " + request.node_id() + " is not live");
+  StartLog(&writer, collection, placement->epoch());
   std::optional<std::vector<internal::ApplyRequest>> missing = writer.log.After(request.epoch(), request.seq());
-  if (!missing) return Status::FailedPrecondition("copy needed: the log does not reach back to its mark");
+  if (!missing) return Status::FailedPrecondition("copy needed: the log does not bring its mark up to date");
   std::shared_ptr<internal::Replica::Stub> stub = StubFor(address);
   for (const internal::ApplyRequest& write : *missing) {
     grpc::ClientContext context;
     Prepare(&context, static_cast<int>(config_.cluster_replicate_timeout_ms));
     internal::ApplyResponse response;
     const grpc::Status sent = stub->Apply(&context, write, &response);
+    if (sent.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
+      return Status::FailedPrecondition("copy needed: " + sent.error_message());
+    }
     if (!sent.ok()) return Status::Unavailable("sending write " + std::to_string(write.seq()) + ": " + sent.error_message());
   }
+  // In sync in etcd and in this node's own view before the next write (which
+  // waits for this lock), so that the next write goes to the new copy too.
   Result<internal::Placement> joined = ChangePlacement(
       collection, [&](const internal::Placement& p) { return p.primary() == node_id_; },
       [&](internal::Placement* p) {
         if (!InSync(*p, request.node_id())) p->add_in_sync(request.node_id());
       });
-  if (!joined.ok()) return joined.status();
+  if (!joined.ok()) return Status::Unavailable("adding it to the in-sync set: " + joined.status().message());
   spdlog::info("cluster: {} caught up on '{}' ({} writes sent) and is in sync", request.node_id(), collection,
                missing->size());
   return Status::Ok();
+}
+
+bool ClusterNode::Track(grpc::ClientContext* call) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (call != nullptr && stopping_) return false;
+  catch_up_call_ = call;
+  return true;
+}
+
+// A node that starts again may have lost writes its copies acknowledged (a
+// disk replaced, a WAL not yet synced when the machine died): it leaves
+// every in-sync set where another live copy is in sync, hands over its
+// primaries to such a copy, and catches up like any returning copy.
+void ClusterNode::LeaveInSyncSets() {
+  std::vector<std::string> names;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (const auto& [name, placed] : placements_) {
+      if (InSync(placed.placement, node_id_)) names.push_back(name);
+    }
+  }
+  for (const std::string& name : names) {
+    Result<internal::Placement> left = ChangePlacement(
+        name,
+        [&](const internal::Placement& p) {
+          std::lock_guard<std::mutex> lock(mu_);
+          return std::any_of(p.in_sync().begin(), p.in_sync().end(),
+                             [&](const std::string& id) { return id != node_id_ && live_.count(id) != 0; });
+        },
+        [&](internal::Placement* p) {
+          std::vector<std::string> kept;
+          for (const std::string& id : p->in_sync()) {
+            if (id != node_id_) kept.push_back(id);
+          }
+          if (p->primary() == node_id_) {  // `still` saw a live one among them
+            std::lock_guard<std::mutex> lock(mu_);
+            const auto heir = std::find_if(kept.begin(), kept.end(), [&](const std::string& id) { return live_.count(id) != 0; });
+            p->set_primary(*heir);
+            p->set_epoch(p->epoch() + 1);
+            std::rotate(kept.begin(), heir, heir + 1);  // the primary first
+          }
+          p->clear_in_sync();
+          for (const std::string& id : kept) p->add_in_sync(id);
+        });
+    if (!left.ok() && left.status().code() != Status::Code::kFailedPrecondition) {
+      spdlog::warn("cluster: {} leaving the in-sync set of '{}': {}", node_id_, name, left.status().ToString());
+    }
+  }
 }
 
 // Each placement that lists this node as a copy that is not in sync.
@@ -678,7 +754,10 @@ Status ClusterNode::CatchUp(const std::string& collection, const internal::Place
     grpc::ClientContext context;
     Prepare(&context, kCatchUpTimeoutMs);
     internal::JoinResponse response;
-    return FromGrpcStatus(stub->Join(&context, request, &response));
+    if (!Track(&context)) return Status::Cancelled("stopping");
+    const Status joined = FromGrpcStatus(stub->Join(&context, request, &response));
+    Track(nullptr);
+    return joined;
   };
   Status joined = join(store_->MarkOf(collection));
   if (joined.code() != Status::Code::kFailedPrecondition) return joined;
@@ -693,10 +772,19 @@ Status ClusterNode::CatchUp(const std::string& collection, const internal::Place
 // every map it holds, the maps it does not hold deleted, its mark last.
 Status ClusterNode::CopyFrom(const std::string& collection, const std::string& address, ReplicationMark* mark) {
   std::shared_ptr<internal::Replica::Stub> stub = StubFor(address);
+  // Until the copy is whole, this copy's mark matches no primary's history:
+  // a crash midway makes the next catch-up copy again.
+  Status invalidated = store_->SetMark(collection, {~uint64_t{0}, 0});
+  if (!invalidated.ok()) return invalidated;
   grpc::ClientContext context;
   Prepare(&context, kCatchUpTimeoutMs);
   internal::CopyRequest request;
   request.set_collection(collection);
+  if (!Track(&context)) return Status::Cancelled("stopping");
+  struct Untrack {
+    ClusterNode* node;
+    ~Untrack() { node->Track(nullptr); }
+  } untrack{this};
   std::unique_ptr<grpc::ClientReader<internal::CopyChunk>> reader = stub->Copy(&context, request);
   std::unordered_set<std::string> kept;
   internal::CopyChunk chunk;

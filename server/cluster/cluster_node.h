@@ -72,9 +72,9 @@ class ClusterNode {
     std::string address;
   };
   // Writes go to the primary. A collection without a placement gets one,
-  // with this node as its primary. Unavailable while the primary is down
-  // (the controller is promoting a copy: retry).
-  Result<Route> ForWrite(const std::string& collection);
+  // with this node as its primary, when `create` (inserts); else NotFound.
+  // Unavailable while the primary is down (a copy is being promoted: retry).
+  Result<Route> ForWrite(const std::string& collection, bool create = true);
   // Reads are served by any in-sync copy, else by the primary. A collection
   // with no placement is read here (the store answers NOT_FOUND).
   Result<Route> ForRead(const std::string& collection);
@@ -87,7 +87,9 @@ class ClusterNode {
 
   // The Replica service (replica_service.h).
   // A copy applies its primary's write. FailedPrecondition for a stale
-  // epoch or a gap in the numbers (the primary then drops it from in-sync).
+  // epoch, a gap in the numbers, or a write that does not follow this copy's
+  // own last one (it applied another primary's write of that number: it has
+  // diverged); the primary then drops it from in-sync and it catches up.
   Status Apply(const internal::ApplyRequest& write, internal::ApplyResponse* response);
   internal::ReplicaStateResponse State(const std::string& collection) const;
   // On the primary: the collection from one snapshot, to a catching-up copy.
@@ -110,9 +112,12 @@ class ClusterNode {
     int64_t revision = 0;  // of its etcd key: the compare-and-swap's expectation
   };
   // A collection this node is the primary of: writes are serialised here.
+  // A collection's writes, one at a time: as its primary (and the log of
+  // them), or as a copy applying them.
   struct Writer {
     std::mutex mu;
     bool log_started = false;  // guarded by mu
+    uint64_t log_epoch = 0;    // guarded by mu: the epoch the log was started for
     ReplicationLog log;        // guarded by mu
     explicit Writer(size_t bytes) : log(bytes) {}
   };
@@ -120,6 +125,10 @@ class ClusterNode {
   ClusterNode(const ServerConfig& config, MapStore* store, std::unique_ptr<EtcdClient> etcd);
   Status Register();
   void OnWatch(const WatchBatch& batch);
+  void LeaveInSyncSets();
+  // Registers the catch-up call in flight (null: none), for Stop to cancel;
+  // false when stopping.
+  bool Track(grpc::ClientContext* call);
   void Maintain();
   void CatchUpLoop();
   void RunController();
@@ -127,6 +136,17 @@ class ClusterNode {
   Status CatchUp(const std::string& collection, const internal::Placement& placement);
   Status CopyFrom(const std::string& collection, const std::string& address, ReplicationMark* mark);
 
+  // This node's placement of `collection` if it is its primary (and holds its
+  // lease); else Unavailable.
+  Result<internal::Placement> PlacementAsPrimary(const std::string& collection) const;
+  // The log of a writer (held) made valid for `epoch`; the store's mark.
+  ReplicationMark StartLog(Writer* writer, const std::string& collection, uint64_t epoch);
+  // A write as the primary: numbered, applied here by `apply` (which fills
+  // the copies' request), sent to the in-sync copies, logged.
+  Status WriteAsPrimary(const std::string& collection,
+                        const std::function<Status(const ReplicationMark&, internal::ApplyRequest*)>& apply);
+  // The placement as etcd holds it now, into the cache unless it is older.
+  void RefreshPlacement(const std::string& collection);
   // The write as the primary applied it, on every other in-sync copy; takes
   // the copies that failed out of the in-sync set. Called holding the writer.
   Status Replicate(const std::string& collection, const internal::Placement& placement,
@@ -165,6 +185,7 @@ class ClusterNode {
   std::unique_ptr<LeaseKeeper> keeper_;
   int64_t lease_id_ = 0;
   bool stopping_ = false;
+  grpc::ClientContext* catch_up_call_ = nullptr;
   bool wake_ = false;
   std::condition_variable wake_cv_;
   std::map<std::string, std::unique_ptr<Writer>> writers_;

@@ -64,7 +64,7 @@ void AddSpares(const std::string& collection, const LiveNodes& live, size_t want
 }  // namespace
 
 internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
-                                 size_t replication_factor) {
+                                 size_t replication_factor, bool others_in_sync) {
   internal::Placement placement;
   placement.set_epoch(1);
   placement.set_primary(creator);
@@ -72,7 +72,7 @@ internal::Placement NewPlacement(const std::string& collection, const LiveNodes&
   placement.add_replicas(creator);
   LiveNodes with_creator = live;
   with_creator.emplace(creator, internal::NodeRecord());
-  AddSpares(collection, with_creator, std::max<size_t>(1, replication_factor), /*in_sync=*/true, &placement);
+  AddSpares(collection, with_creator, std::max<size_t>(1, replication_factor), others_in_sync, &placement);
   return placement;
 }
 

@@ -20,10 +20,11 @@ using LiveNodes = std::map<std::string, internal::NodeRecord>;
 // becomes its primary: the write needs no forward): `creator` and the
 // replication_factor - 1 other live nodes that rank highest for the
 // collection (rendezvous hashing, so collections spread evenly and a node
-// joining moves few), preferring zones not yet used. Every copy of a new,
-// empty collection is in sync. Epoch 1.
+// joining moves few), preferring zones not yet used. The other copies are in
+// sync when `others_in_sync` (a new, empty collection); else they copy it
+// first (the creator already held maps of it). Epoch 1.
 internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
-                                 size_t replication_factor);
+                                 size_t replication_factor, bool others_in_sync = true);
 
 // The repaired placement, or nothing when `current` needs no change:
 // - a dead primary is replaced by the first live in-sync node (epoch + 1);

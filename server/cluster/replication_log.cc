@@ -10,7 +10,7 @@ void ReplicationLog::Reset(uint64_t epoch, uint64_t seq) {
 }
 
 void ReplicationLog::Append(internal::ApplyRequest write) {
-  const uint64_t last = writes_.empty() ? base_seq_ : writes_.back().first.seq();
+  const uint64_t last = last_seq();
   if (write.seq() != last + 1) Reset(~uint64_t{0}, write.seq() - 1);  // the epoch before it is unknown: matches none
   const size_t size = write.ByteSizeLong();
   bytes_ += size;
@@ -24,7 +24,7 @@ void ReplicationLog::Append(internal::ApplyRequest write) {
 }
 
 std::optional<std::vector<internal::ApplyRequest>> ReplicationLog::After(uint64_t epoch, uint64_t seq) const {
-  const uint64_t last = writes_.empty() ? base_seq_ : writes_.back().first.seq();
+  const uint64_t last = last_seq();
   if (seq < base_seq_ || seq > last) return std::nullopt;
   if (seq == base_seq_) {
     if (epoch != base_epoch_) return std::nullopt;

@@ -35,6 +35,9 @@ class ReplicationLog {
   // cannot tell that a copy at (epoch, seq) holds this primary's history.
   std::optional<std::vector<internal::ApplyRequest>> After(uint64_t epoch, uint64_t seq) const;
 
+  // The last write's number (the base's when empty).
+  uint64_t last_seq() const { return writes_.empty() ? base_seq_ : writes_.back().first.seq(); }
+
  private:
   size_t max_bytes_;
   size_t bytes_ = 0;

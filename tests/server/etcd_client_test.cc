@@ -564,19 +564,22 @@ TEST(EtcdClientTest, AThreeMemberClusterKeepsServingWhenAMemberHangsOrItsLeaderD
   std::vector<std::string> endpoints;
   for (const int i : order) endpoints.push_back((*etcd)->endpoint(i));
   EtcdClientOptions options = OptionsFor(endpoints);
-  options.call_timeout_ms = 500;
+  // Long enough that a live member answers in time on a loaded 2-core
+  // machine (500 ms was not, under ctest -j2): only the paused one times out.
+  options.call_timeout_ms = 2000;
   auto connected = EtcdClient::Connect(options);
   ASSERT_TRUE(connected.ok()) << connected.status().ToString();
   EtcdClient& client = **connected;
   ASSERT_EQ(client.current_endpoint(), endpoints[0]);
 
-  // A hung follower: the attempt there times out, the leader applies it.
+  // A hung follower: the attempt there times out, another member applies it.
   (*etcd)->Pause(order[0]);
   auto created = client.PutIfRevision("c/1", "one", 0);
   (*etcd)->Resume(order[0]);
   ASSERT_TRUE(created.ok()) << created.status().ToString();
   EXPECT_TRUE(*created);
-  ASSERT_EQ(client.current_endpoint(), endpoints[1]);
+  // (Which member answered is not asserted: SIGSTOP is delivered
+  // asynchronously, and on a loaded machine the member may still answer.)
 
   // The client, a keeper and a watcher at the leader, which dies. 2 s: a
   // 1 s lease could run out, for the keeper, during the election.

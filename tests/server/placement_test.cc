@@ -35,6 +35,13 @@ TEST(PlacementTest, ANewCollectionLivesOnItsCreatorAndNodesOfOtherZones) {
   EXPECT_EQ(zones, (std::set<std::string>{"a", "b", "c"}));
 }
 
+TEST(PlacementTest, ACollectionItsCreatorAlreadyHeldIsCopiedByTheOthersBeforeTheyAreInSync) {
+  const internal::Placement p =
+      NewPlacement("site", Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}}), "n1", 3, /*others_in_sync=*/false);
+  EXPECT_EQ(p.replicas_size(), 3);
+  EXPECT_EQ(List(p.in_sync()), (std::vector<std::string>{"n1"}));
+}
+
 TEST(PlacementTest, CollectionsSpreadOverTheNodes) {
   const LiveNodes live = Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}, {"n4", ""}, {"n5", ""}});
   std::map<std::string, int> copies;
