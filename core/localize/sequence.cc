@@ -122,7 +122,18 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   }
   LocalizeOptions judged = options;
   judged.refine_best = false;  // a refinement would score the newest map alone
-  Conclude(newest, judged, std::move(hits), nullptr, with_changes, &out);
+  // The newest map's best fit elsewhere in the best hit's map is a rival: in
+  // a corridor every map of the sequence may fit as well shifted along it
+  // (the odometry moves them together), and only that shift tells.
+  std::function<double(const LocalizedHit&)> second_pose;
+  if (options.self_rival_radius_m > 0) {
+    second_pose = [&](const LocalizedHit& best) {
+      const ScanMatch second = SecondBestMatch(newest.match, *best.db, best.pose, options.self_rival_radius_m,
+                                               options.self_rival_angle_deg, options.match);
+      return second.score > 0 ? Scored(newest, *best.db, second, options).score : 0.0;
+    };
+  }
+  Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out);
   out.verdict.sequence_maps = earlier.size();
   if (!out.hits.empty()) out.verdict.sequence_agreeing = out.hits[0].sequence_agreeing;
   return out;

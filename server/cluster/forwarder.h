@@ -10,8 +10,7 @@
 #include <string>
 
 #include <grpcpp/client_context.h>
-#include <grpcpp/create_channel.h>
-#include <grpcpp/security/credentials.h>
+#include <grpcpp/channel.h>
 #include <grpcpp/support/server_callback.h>
 
 #include "lmd/v1/lmd.grpc.pb.h"

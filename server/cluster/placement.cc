@@ -1,7 +1,6 @@
 #include "server/cluster/placement.h"
 
 #include <algorithm>
-#include <functional>
 #include <vector>
 
 namespace lmd::server::cluster {

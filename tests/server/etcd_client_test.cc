@@ -576,14 +576,24 @@ TEST(EtcdClientTest, AThreeMemberClusterKeepsServingWhenAMemberHangsOrItsLeaderD
   (*etcd)->Pause(order[0]);
   auto created = client.PutIfRevision("c/1", "one", 0);
   (*etcd)->Resume(order[0]);
-  ASSERT_TRUE(created.ok()) << created.status().ToString();
-  EXPECT_TRUE(*created);
-  // (Which member answered is not asserted: SIGSTOP is delivered
-  // asynchronously, and on a loaded machine the member may still answer.)
+  // Either another member applied it, or the paused one had taken it before
+  // SIGSTOP landed (signals arrive asynchronously; seen under load): then
+  // the retry finds the key written and the outcome is unknown, and the
+  // contract is to re-read.
+  if (created.ok()) {
+    EXPECT_TRUE(*created);
+  } else {
+    ASSERT_EQ(created.status().code(), Status::Code::kDeadlineExceeded) << created.status().ToString();
+    EXPECT_NE(created.status().message().find("outcome unknown"), std::string::npos) << created.status().ToString();
+  }
+  auto written = client.Get("c/1");
+  ASSERT_TRUE(written.ok() && written->has_value()) << written.status().ToString();
+  EXPECT_EQ((*written)->value, "one");
 
-  // The client, a keeper and a watcher at the leader, which dies. 2 s: a
-  // 1 s lease could run out, for the keeper, during the election.
-  auto lease = client.GrantLease(2);
+  // The client, a keeper and a watcher at the leader, which dies. 3 s: a
+  // 1 s lease could run out, for the keeper, during the election; 3 s leaves
+  // room for a loaded 2-core machine.
+  auto lease = client.GrantLease(3);
   ASSERT_TRUE(lease.ok()) << lease.status().ToString();
   LossRecord loss;
   auto keeper = client.KeepAlive(*lease, loss.Callback());
@@ -609,7 +619,7 @@ TEST(EtcdClientTest, AThreeMemberClusterKeepsServingWhenAMemberHangsOrItsLeaderD
 
   ASSERT_TRUE(recorder.WaitForEvents(2, milliseconds(5000))) << recorder.Described().size();
   EXPECT_EQ(recorder.Described(), (std::vector<std::string>{"put c/2=two", "put c/1=uno"}));
-  std::this_thread::sleep_until(killed + milliseconds(2100));  // beyond the TTL
+  std::this_thread::sleep_until(killed + milliseconds(3100));  // beyond the TTL
   EXPECT_EQ(loss.calls, 0);
   EXPECT_TRUE(KeyExists(client, "c/owned"));
 }
