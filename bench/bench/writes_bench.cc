@@ -13,6 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "core/sim/simulate.h"
+#include "core/util/split.h"
 #include "lmd/v1/lmd.grpc.pb.h"
 #include "proto/convert.h"
 
@@ -20,16 +21,6 @@ namespace lmd::bench {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::vector<std::string> SplitCommas(const std::string& s) {
-  std::vector<std::string> out;
-  std::string item;
-  std::istringstream in(s);
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
 
 std::unique_ptr<v1::LmdService::Stub> StubFor(const std::string& address) {
   grpc::ChannelArguments args;

@@ -22,6 +22,7 @@
 
 #include "bench/eval/answer_scoring.h"
 #include "bench/eval/args.h"
+#include "core/util/split.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
@@ -322,16 +323,6 @@ std::string Now() {
   const std::time_t t = std::time(nullptr);
   std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
   return buf;
-}
-
-std::vector<std::string> SplitCommas(const std::string& s) {
-  std::vector<std::string> out;
-  std::string item;
-  std::istringstream in(s);
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
 }
 
 }  // namespace

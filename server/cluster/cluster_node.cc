@@ -12,6 +12,7 @@
 
 #include "core/describe/lmd_codec.h"
 #include "core/place/place_features.h"
+#include "core/util/split.h"
 #include "server/grpc_status.h"
 
 namespace lmd::server::cluster {
@@ -22,16 +23,6 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kCopyChunkMaps = 64;
 constexpr auto kMaintainEvery = std::chrono::milliseconds(250);
 constexpr int kCatchUpTimeoutMs = 600000;  // a whole collection's copy
-
-std::vector<std::string> SplitCommas(const std::string& s) {
-  std::vector<std::string> out;
-  std::string item;
-  std::istringstream in(s);
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
 
 
 // A stored map as a copy receives it, and back.
