@@ -3,14 +3,14 @@
 #include <functional>
 #include <string_view>
 
+#include "core/util/fnv1a.h"
+
 namespace lmd::server {
 
 DescriptorCache::Key DescriptorCache::KeyOf(const std::string& map_bytes) {
   Key key;
   key.a = std::hash<std::string_view>()(map_bytes);
-  uint64_t fnv = 0xcbf29ce484222325ULL;  // FNV-1a, independent of std::hash
-  for (unsigned char c : map_bytes) fnv = (fnv ^ c) * 0x100000001b3ULL;
-  key.b = fnv;
+  key.b = Fnv1a64(map_bytes);  // independent of std::hash
   key.size = map_bytes.size();
   return key;
 }

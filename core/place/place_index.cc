@@ -7,6 +7,8 @@
 #include <numeric>
 #include <tuple>
 
+#include "core/util/fnv1a.h"
+
 namespace lmd {
 namespace {
 
@@ -143,11 +145,11 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
     for (int t = 0; t < kTables; ++t) buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(f.code, t)].push_back(handle);
   }
   feature_count_ += features.features.size();
-  uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a over the codes and positions
+  uint64_t hash = kFnv1aOffset;  // over the codes and positions, a word at a time
   for (const PlaceFeature& f : features.features) {
     uint32_t x, y;
     std::memcpy(&x, &f.x, 4), std::memcpy(&y, &f.y, 4);
-    for (uint64_t word : {f.code[0], f.code[1], uint64_t{x} << 32 | y}) hash = (hash ^ word) * 0x100000001b3ULL;
+    for (uint64_t word : {f.code[0], f.code[1], uint64_t{x} << 32 | y}) hash = Fnv1aMix(hash, word);
   }
   slot_hash_[slot] = hash;
   slot_id_[slot] = id;

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/util/fnv1a.h"
+
 namespace lmd::server::cluster {
 namespace {
 
 uint64_t Rank(const std::string& collection, const std::string& node) {
-  uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a of "collection/node": stable across builds and hosts
-  for (char c : collection + "/" + node) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
-  return h;
+  return Fnv1a64(collection + "/" + node);  // the same on every node
 }
 
 bool Contains(const google::protobuf::RepeatedPtrField<std::string>& list, const std::string& id) {
