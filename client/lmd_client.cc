@@ -1,6 +1,7 @@
 #include "client/lmd_client.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
@@ -61,6 +62,15 @@ std::chrono::milliseconds Jittered(std::chrono::milliseconds backoff) {
   return std::chrono::milliseconds(static_cast<long>(static_cast<double>(backoff.count()) * factor(random)));
 }
 
+// 128 random bits in hex: unique enough that two robots' inserts never share one.
+std::string RandomRequestId() {
+  thread_local std::mt19937_64 random(std::random_device{}() ^ (uint64_t{std::random_device{}()} << 32));
+  char buffer[40];
+  std::snprintf(buffer, sizeof(buffer), "%016llx%016llx", static_cast<unsigned long long>(random()),
+                static_cast<unsigned long long>(random()));
+  return buffer;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<LmdClient>> LmdClient::Create(const ClientOptions& options) {
@@ -107,11 +117,18 @@ grpc::Status LmdClient::WithRetries(const std::string& collection,
 
 grpc::Status LmdClient::InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const {
   const std::string collection = request.maps_size() > 0 ? request.maps(0).metadata().collection() : "";
-  // A retry of maps lmdd names itself could store them twice.
+  // A retry of maps lmdd names itself is safe with a request id: lmdd
+  // answers a repeated one without storing the maps again.
   const bool every_id_given = std::all_of(request.maps().begin(), request.maps().end(),
                                           [](const v1::InsertMapRequest& m) { return !m.metadata().map_id().empty(); });
-  return WithRetries(
-      collection, [&](grpc::ClientContext* c) { return stub_->InsertMaps(c, request, response); }, every_id_given);
+  v1::InsertMapsRequest with_id;
+  const v1::InsertMapsRequest* sent = &request;
+  if (!every_id_given && request.request_id().empty()) {
+    with_id = request;
+    with_id.set_request_id(RandomRequestId());
+    sent = &with_id;
+  }
+  return WithRetries(collection, [&](grpc::ClientContext* c) { return stub_->InsertMaps(c, *sent, response); });
 }
 
 grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,

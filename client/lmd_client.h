@@ -15,9 +15,11 @@
 // was full (RESOURCE_EXHAUSTED with the "lmd-busy" trailer), is retried with
 // exponential backoff and random jitter (so that a fleet does not retry in
 // step) up to max_attempts times within the deadline; other errors return at
-// once. Only calls that are safe to repeat are retried: an insert only when
-// every map has an explicit id (a retry then replaces the same map instead of
-// adding a second copy), a backup never; a retried delete that finds the map
+// once. Only calls that are safe to repeat are retried: an insert always
+// (when lmdd is to assign ids, the client gives the request a random
+// request_id unless it has one, and lmdd answers a repeat without storing
+// the maps twice; explicit ids make a retry replace the same maps), a backup
+// never; a retried delete that finds the map
 // gone reports success (an earlier attempt deleted it and its answer was
 // lost). The returned status is lmdd's: OK,
 // INVALID_ARGUMENT with a message saying what is wrong, NOT_FOUND,

@@ -110,6 +110,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "retain_maps_per_collection") return SetUnsigned(key, value, &config->retain_maps_per_collection);
+  if (key == "insert_request_ids_kept") return SetUnsigned(key, value, &config->insert_request_ids_kept, 1);
   if (key == "busy_queued_calls") return SetUnsigned(key, value, &config->busy_queued_calls);
   if (key == "busy_verify_candidates") return SetUnsigned(key, value, &config->busy_verify_candidates);
   if (key == "busy_search_candidates") return SetUnsigned(key, value, &config->busy_search_candidates);

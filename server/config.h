@@ -43,6 +43,11 @@ struct ServerConfig {
   // robot-second grows without bound and every query's first pass reads more
   // postings as it grows (docs/capacity.md); a cap bounds both.
   uint32_t retain_maps_per_collection = 0;
+  // Insert request ids (InsertMapsRequest.request_id) each collection keeps
+  // with their answers, so that a retry is answered instead of storing its
+  // maps again: the newest this many. A retry comes seconds after its first
+  // attempt; 10000 covers minutes of a busy fleet's inserts.
+  uint32_t insert_request_ids_kept = 10000;
   // Largest absolute coordinate of a point or pose, m. Catches unit mistakes
   // (mm sent as m) and garbage before it reaches the method.
   double max_abs_coordinate_m = 100000.0;

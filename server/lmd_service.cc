@@ -1,7 +1,9 @@
 #include "server/lmd_service.h"
 
 #include <map>
+#include <optional>
 
+#include "core/util/fnv1a.h"
 #include "proto/convert.h"
 #include "server/indexing.h"
 #include "server/stream_insert.h"
@@ -37,6 +39,13 @@ Status ValidateKey(const std::string& collection, const std::string& map_id) {
 }
 
 // The collection a batch writes to, for logs ("" if none or several).
+// What a kept request id is checked against: the maps as sent.
+uint64_t RequestFingerprint(const std::vector<const v1::InsertMapRequest*>& requests) {
+  uint64_t hash = kFnv1aOffset;
+  for (const v1::InsertMapRequest* request : requests) hash = Fnv1a64(request->SerializeAsString(), hash);
+  return hash;
+}
+
 std::string BatchCollection(const v1::InsertMapsRequest& request) {
   if (request.maps_size() == 0) return "";
   const std::string& first = request.maps(0).metadata().collection();
@@ -81,13 +90,17 @@ double LmdServiceImpl::uptime_s() const {
 }
 
 Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
-                              v1::InsertMapsResponse* response) {
+                              const std::string& request_id, v1::InsertMapsResponse* response) {
   std::vector<MapWrite> maps;
   maps.reserve(requests.size());
   for (size_t i = 0; i < requests.size(); ++i) {
     Status valid = ValidateInsert(*requests[i], config_, first_index + i);
     if (!valid.ok()) return valid;
   }
+  Status valid_id = ValidateRequestId(request_id);
+  if (!valid_id.ok()) return valid_id;
+  std::optional<InsertRequestId> request;
+  if (!request_id.empty()) request = InsertRequestId{request_id, RequestFingerprint(requests)};
   std::vector<std::shared_ptr<const DescribedMap>> described;
   for (const v1::InsertMapRequest* request : requests) {  // described outside the store's lock
     MapWrite write;
@@ -111,7 +124,10 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
   InsertLimits limits;
   limits.max_collections = config_.max_collections;
   limits.retain_maps = config_.retain_maps_per_collection;
+  limits.request_ids_kept = config_.insert_request_ids_kept;
   std::vector<v1::MapMetadata> evicted;
+  bool replayed = false;
+  const InsertRequestId* kept = request ? &*request : nullptr;
   Status stored;
   if (cluster_ != nullptr) {  // the stream's maps too: each of its batches holds one map
     const std::string& collection = maps.front().map.metadata().collection();
@@ -126,13 +142,14 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
       return Status::Unavailable("this node is not the primary of collection '" + collection + "': send to " +
                                  route->address);
     }
-    stored = cluster_->Insert(collection, &maps, limits, &evicted);
+    stored = cluster_->Insert(collection, &maps, limits, &evicted, kept, &replayed);
   } else {
-    stored = store_->InsertMaps(&maps, limits, &evicted);
+    stored = store_->InsertMaps(&maps, limits, &evicted, nullptr, kept, &replayed);
   }
   if (!stored.ok()) return stored;
+  response->set_replayed(replayed);
   // Prepared for scan matching already: the first query that hits them reuses it.
-  for (size_t i = 0; i < maps.size(); ++i) {
+  for (size_t i = 0; i < maps.size() && !replayed; ++i) {
     prepared_.Put(maps[i].map.metadata().collection(), maps[i].index_id, described[i]->place.map);
   }
   for (const MapWrite& write : maps) *response->add_maps() = write.map.metadata();
@@ -160,13 +177,16 @@ grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext
     if (cluster_ != nullptr && BatchCollection(*request).empty()) {
       return Status::InvalidArgument("in a cluster, one InsertMaps call holds maps of one collection");
     }
+    if (!request->request_id().empty() && BatchCollection(*request).empty()) {
+      return Status::InvalidArgument("an InsertMaps call with a request_id holds maps of one collection");
+    }
     if (auto elsewhere = ServedElsewhere(true, BatchCollection(*request), context, &v1::LmdService::Stub::InsertMaps,
                                          *request, response)) {
       return *elsewhere;
     }
     std::vector<const v1::InsertMapRequest*> maps;
     for (const auto& map : request->maps()) maps.push_back(&map);
-    return Insert(maps, 0, response);
+    return Insert(maps, 0, request->request_id(), response);
   });
 }
 

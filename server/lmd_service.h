@@ -56,9 +56,10 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   // serve are forwarded, and writes are replicated. `node` outlives the service.
   void SetCluster(cluster::ClusterNode* node) { cluster_ = node; }
 
-  // Validates and stores one batch (also used per message by the stream).
+  // Validates and stores one batch (also used per message by the stream),
+  // once per non-empty `request_id` (InsertMapsRequest.request_id).
   Status Insert(std::vector<const v1::InsertMapRequest*> requests, size_t first_index,
-                v1::InsertMapsResponse* response);
+                const std::string& request_id, v1::InsertMapsResponse* response);
 
   const ServerConfig& config() const { return config_; }
 

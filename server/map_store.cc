@@ -19,6 +19,7 @@
 #include "core/index/index.h"
 #include "core/index/postings.h"
 #include "core/localize/anchor_index.h"
+#include "core/util/fnv1a.h"
 #include "proto/convert.h"
 #include "server/validate.h"
 
@@ -55,6 +56,20 @@ std::string MapKey(const std::string& collection, const std::string& map_id) {
   return collection + "/" + map_id;
 }
 
+// Keys of the requests column family (lmd.internal.InsertRequestRecord).
+std::string RequestKey(const std::string& collection, const std::string& request_id) {
+  return collection + "/=" + request_id;
+}
+std::string RequestOrderKey(const std::string& collection, uint64_t number) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%020llu", static_cast<unsigned long long>(number));
+  return collection + "/#" + buffer;
+}
+
+// Kept request ids forgotten per insert beyond the limit: a lowered limit is
+// reached over several inserts.
+constexpr int kMaxRequestsForgotten = 4;
+
 std::string AutoMapId(uint64_t number) {
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), "m%012llu", static_cast<unsigned long long>(number));
@@ -79,9 +94,7 @@ v1::CollectionInfo ToInfo(const std::string& name, const internal::CollectionRec
 // The route a map's metadata gives (MapStore::RouteOf); false if unset.
 bool RouteFromMetadata(const v1::MapMetadata& meta, MapSource::Route* route) {
   if (meta.robot_id().empty() || meta.sequence() == 0) return false;
-  uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a of the robot id
-  for (unsigned char c : meta.robot_id()) hash = (hash ^ c) * 0x100000001b3ULL;
-  *route = {hash, meta.sequence()};
+  *route = {Fnv1a64(meta.robot_id()), meta.sequence()};
   return true;
 }
 
@@ -126,7 +139,8 @@ Result<std::unique_ptr<MapStore>> MapStore::Open(const MapStoreOptions& options)
   postings_options.memtable_factory = std::make_shared<rocksdb::VectorRepFactory>();
   const std::vector<rocksdb::ColumnFamilyDescriptor> families = {
       {rocksdb::kDefaultColumnFamilyName, {}}, {"maps", {}},        {"metadata", {}}, {"descriptors", {}},
-      {"postings", postings_options},          {"collections", {}}, {"meta", {}}};
+      {"postings", postings_options},          {"collections", {}}, {"meta", {}},
+      {"requests", {}}};
   std::vector<rocksdb::ColumnFamilyHandle*> handles;
   rocksdb::DB* db = nullptr;
   const rocksdb::Status opened = rocksdb::DB::Open(db_options, options.data_dir, families, &handles, &db);
@@ -141,6 +155,7 @@ Result<std::unique_ptr<MapStore>> MapStore::Open(const MapStoreOptions& options)
   store->postings_cf_ = handles[4];
   store->collections_cf_ = handles[5];
   store->meta_cf_ = handles[6];
+  store->requests_cf_ = handles[7];
   store->sync_writes_ = options.sync_writes;
   store->data_dir_ = options.data_dir;
   store->indexing_ = options.indexing;
@@ -156,7 +171,8 @@ MapStore::~MapStore() { Close(); }
 
 Status MapStore::Close() {
   if (db_ == nullptr) return Status::Ok();
-  for (auto* handle : {maps_cf_, metadata_cf_, descriptors_cf_, postings_cf_, collections_cf_, meta_cf_}) {
+  for (auto* handle :
+       {maps_cf_, metadata_cf_, descriptors_cf_, postings_cf_, collections_cf_, meta_cf_, requests_cf_}) {
     db_->DestroyColumnFamilyHandle(handle);
   }
   const rocksdb::Status closed = db_->Close();
@@ -325,9 +341,41 @@ Result<v1::MapMetadata> MapStore::ReadMetadata(const std::string& key) const {
   return meta;
 }
 
+Result<std::optional<internal::InsertRequestRecord>> MapStore::ReadRequest(const std::string& collection,
+                                                                           const std::string& request_id) const {
+  std::string value;
+  const rocksdb::Status read = db_->Get({}, requests_cf_, RequestKey(collection, request_id), &value);
+  if (read.IsNotFound()) return std::optional<internal::InsertRequestRecord>();
+  if (!read.ok()) return FromRocks(read, "reading request " + request_id);
+  internal::InsertRequestRecord record;
+  if (!record.ParseFromString(value)) return Status::Corruption("record of request " + request_id + " does not parse");
+  return std::optional<internal::InsertRequestRecord>(std::move(record));
+}
+
 Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
-                            std::vector<v1::MapMetadata>* evicted, const ReplicationMark* mark) {
+                            std::vector<v1::MapMetadata>* evicted, const ReplicationMark* mark,
+                            const InsertRequestId* request, bool* replayed) {
   std::lock_guard<std::mutex> lock(write_mutex_);
+  if (replayed != nullptr) *replayed = false;
+  if (request != nullptr) {
+    if (maps->empty()) return Status::InvalidArgument("an insert with a request id holds no maps");
+    const std::string& collection = maps->front().map.metadata().collection();
+    for (const MapWrite& write : *maps) {
+      if (write.map.metadata().collection() != collection) {
+        return Status::InvalidArgument("an insert with a request id holds maps of one collection only");
+      }
+    }
+    Result<std::optional<internal::InsertRequestRecord>> kept = ReadRequest(collection, request->id);
+    if (!kept.ok()) return kept.status();
+    if (*kept) {  // a retry: answered as the first time, nothing written
+      if ((*kept)->fingerprint() != request->fingerprint || (*kept)->maps_size() != static_cast<int>(maps->size())) {
+        return Status::FailedPrecondition("request_id '" + request->id + "' was used by an earlier insert of other maps into collection '" + collection + "'");
+      }
+      for (size_t i = 0; i < maps->size(); ++i) *(*maps)[i].map.mutable_metadata() = (*kept)->maps(static_cast<int>(i));
+      if (replayed != nullptr) *replayed = true;
+      return Status::Ok();
+    }
+  }
   // Counters change on copies, published only once the batch is written.
   std::map<std::string, internal::CollectionRecord> records;
   std::map<std::string, IndexChange> changes;
@@ -479,6 +527,27 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     records.begin()->second.set_replication_epoch(mark->epoch);
     records.begin()->second.set_replication_seq(mark->seq);
   }
+  if (request != nullptr) {
+    const std::string& collection = maps->front().map.metadata().collection();
+    internal::CollectionRecord& record = records.at(collection);
+    internal::InsertRequestRecord kept;
+    kept.set_number(record.next_request());
+    kept.set_fingerprint(request->fingerprint);
+    for (const MapWrite& write : *maps) *kept.add_maps() = write.map.metadata();
+    batch.Put(requests_cf_, RequestKey(collection, request->id), kept.SerializeAsString());
+    batch.Put(requests_cf_, RequestOrderKey(collection, kept.number()), request->id);
+    record.set_next_request(kept.number() + 1);
+    for (int i = 0; i < kMaxRequestsForgotten && record.next_request() - record.first_request() > limits.request_ids_kept;
+         ++i) {
+      const std::string order = RequestOrderKey(collection, record.first_request());
+      std::string oldest;
+      const rocksdb::Status read = db_->Get({}, requests_cf_, order, &oldest);
+      if (!read.ok() && !read.IsNotFound()) return FromRocks(read, "reading the oldest kept request");
+      if (read.ok()) batch.Delete(requests_cf_, RequestKey(collection, oldest));
+      batch.Delete(requests_cf_, order);
+      record.set_first_request(record.first_request() + 1);
+    }
+  }
   for (const auto& [name, record] : records) batch.Put(collections_cf_, name, record.SerializeAsString());
   rocksdb::WriteOptions write_options;
   write_options.sync = sync_writes_;
@@ -602,16 +671,28 @@ ReplicationMark MapStore::MarkOf(const std::string& collection) const {
   return {state->record.replication_epoch(), state->record.replication_seq()};
 }
 
-Status MapStore::SetMark(const std::string& collection, const ReplicationMark& mark) {
+Status MapStore::SetMark(const std::string& collection, const ReplicationMark& mark,
+                         const std::vector<KeptRequest>* requests) {
   std::lock_guard<std::mutex> lock(write_mutex_);
   CollectionState* state = FindCollection(collection);
   internal::CollectionRecord record = state ? state->record : internal::CollectionRecord();
   record.set_replication_epoch(mark.epoch);
   record.set_replication_seq(mark.seq);
+  rocksdb::WriteBatch batch;
+  if (requests != nullptr) {
+    // "<collection>/" up to "<collection>0": every key of the collection ('0' follows '/').
+    batch.DeleteRange(requests_cf_, collection + "/", collection + "0");
+    record.set_first_request(requests->empty() ? 0 : requests->front().record.number());
+    record.set_next_request(requests->empty() ? 0 : requests->back().record.number() + 1);
+    for (const KeptRequest& kept : *requests) {
+      batch.Put(requests_cf_, RequestKey(collection, kept.id), kept.record.SerializeAsString());
+      batch.Put(requests_cf_, RequestOrderKey(collection, kept.record.number()), kept.id);
+    }
+  }
+  batch.Put(collections_cf_, collection, record.SerializeAsString());
   rocksdb::WriteOptions write_options;
   write_options.sync = sync_writes_;
-  Status status = FromRocks(db_->Put(write_options, collections_cf_, collection, record.SerializeAsString()),
-                            "writing the replication mark of " + collection);
+  Status status = FromRocks(db_->Write(write_options, &batch), "writing the replication mark of " + collection);
   if (!status.ok()) return status;
   std::unique_lock<std::shared_mutex> collections_lock(collections_mutex_);
   auto& owned = collections_[collection];
@@ -621,7 +702,9 @@ Status MapStore::SetMark(const std::string& collection, const ReplicationMark& m
 }
 
 Status MapStore::ForEachMap(const std::string& collection, size_t chunk,
-                            const std::function<bool(std::vector<StoredEntry>&&)>& emit, ReplicationMark* mark) const {
+                            const std::function<bool(std::vector<StoredEntry>&&)>& emit,
+                            const std::function<bool(std::vector<KeptRequest>&&)>& emit_requests,
+                            ReplicationMark* mark) const {
   if (!HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
   const rocksdb::Snapshot* snapshot = db_->GetSnapshot();
   rocksdb::ReadOptions read;
@@ -655,6 +738,27 @@ Status MapStore::ForEachMap(const std::string& collection, size_t chunk,
   }
   if (!it->status().ok()) return finish(FromRocks(it->status(), "reading " + collection));
   if (!entries.empty() && !emit(std::move(entries))) return finish(Status::Cancelled("copy of " + collection + " stopped"));
+  // The kept request ids, oldest first: their order keys "<collection>/#<number>".
+  const std::string order_prefix = collection + "/#";
+  std::unique_ptr<rocksdb::Iterator> order(db_->NewIterator(read, requests_cf_));
+  std::vector<KeptRequest> kept;
+  for (order->Seek(order_prefix); order->Valid() && order->key().starts_with(order_prefix); order->Next()) {
+    KeptRequest request;
+    request.id = order->value().ToString();
+    got = db_->Get(read, requests_cf_, RequestKey(collection, request.id), &value);
+    if (!got.ok() || !request.record.ParseFromString(value)) {
+      return finish(Status::Corruption("kept request " + request.id + " of " + collection));
+    }
+    kept.push_back(std::move(request));
+    if (kept.size() == chunk) {
+      if (!emit_requests(std::move(kept))) return finish(Status::Cancelled("copy of " + collection + " stopped"));
+      kept.clear();
+    }
+  }
+  if (!order->status().ok()) return finish(FromRocks(order->status(), "reading the requests of " + collection));
+  if (!kept.empty() && !emit_requests(std::move(kept))) {
+    return finish(Status::Cancelled("copy of " + collection + " stopped"));
+  }
   return finish(Status::Ok());
 }
 

@@ -7,6 +7,7 @@
 //   descriptors  -> lmd.internal.IndexedMap (index id + encoded LMD)
 //   postings     "<collection>/" + posting key (core/index/postings.h) -> value
 //   collections  collection name -> lmd.internal.CollectionRecord (counters)
+//   requests     kept insert request ids (lmd.internal.InsertRequestRecord)
 //   meta         "format", "indexing" (fingerprint of the indexing settings)
 // Every insert or delete is ONE WriteBatch holding all of that for its maps,
 // so a map is either wholly stored, described, indexed and counted, or
@@ -88,6 +89,16 @@ struct InsertLimits {
   // write, at most 256 more than the insert adds (a lowered cap is reached
   // over several inserts). 0: no cap.
   uint32_t retain_maps = 0;
+  // Insert request ids a collection keeps (insert_request_ids_kept): the
+  // oldest beyond are forgotten, a few per insert.
+  uint32_t request_ids_kept = 10000;
+};
+
+// An insert's request id (InsertMapsRequest.request_id) and the fingerprint
+// of its maps as sent (computed by the service that took the request).
+struct InsertRequestId {
+  std::string id;
+  uint64_t fingerprint = 0;
 };
 
 // A replicated collection's last write (server/cluster): its primary's
@@ -95,6 +106,12 @@ struct InsertLimits {
 struct ReplicationMark {
   uint64_t epoch = 0;
   uint64_t seq = 0;
+};
+
+// A kept insert request id with its record, as a replica copies it.
+struct KeptRequest {
+  std::string id;
+  internal::InsertRequestRecord record;
 };
 
 // A stored map with what lmdd computed from it, as a replica copies it.
@@ -129,8 +146,13 @@ class MapStore {
   // *evicted (oldest first; may be null).
   // With `mark`, the batch must hold one collection only, and its
   // replication mark is set in the same write.
+  // With `request`, too: if the collection keeps that request id, nothing is
+  // written, *maps' metadata becomes what the first insert stored and
+  // *replayed (optional) is set (FailedPrecondition if the fingerprint
+  // differs); else the id is kept with the stored metadata in the same write.
   Status InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& limits,
-                    std::vector<v1::MapMetadata>* evicted = nullptr, const ReplicationMark* mark = nullptr);
+                    std::vector<v1::MapMetadata>* evicted = nullptr, const ReplicationMark* mark = nullptr,
+                    const InsertRequestId* request = nullptr, bool* replayed = nullptr);
 
   // NotFound naming the collection or the map if absent.
   Result<v1::StoredMap> GetMap(const std::string& collection, const std::string& map_id) const;
@@ -145,14 +167,19 @@ class MapStore {
 
   // The collection's replication mark ({0, 0} if unknown or never replicated).
   ReplicationMark MarkOf(const std::string& collection) const;
-  // Sets the mark alone, creating the collection (empty) if absent.
-  Status SetMark(const std::string& collection, const ReplicationMark& mark);
+  // Sets the mark, creating the collection (empty) if absent. With
+  // `requests`, the collection's kept insert request ids become these, in
+  // the same write (a whole copy from the primary).
+  Status SetMark(const std::string& collection, const ReplicationMark& mark,
+                 const std::vector<KeptRequest>* requests = nullptr);
   // Every map of the collection from one consistent snapshot, in id order,
   // `chunk` at a time to `emit` (which may stop the walk by returning
-  // false); *mark receives the mark that snapshot holds. NotFound for an
-  // unknown collection.
+  // false), then its kept request ids (oldest first) to `emit_requests`,
+  // `chunk` at a time too; *mark receives the mark that snapshot holds.
+  // NotFound for an unknown collection.
   Status ForEachMap(const std::string& collection, size_t chunk,
-                    const std::function<bool(std::vector<StoredEntry>&&)>& emit, ReplicationMark* mark) const;
+                    const std::function<bool(std::vector<StoredEntry>&&)>& emit,
+                    const std::function<bool(std::vector<KeptRequest>&&)>& emit_requests, ReplicationMark* mark) const;
 
   // Up to `limit` maps' metadata in id order, starting after `after` (empty:
   // from the first). *next is the last id returned when more may follow, else
@@ -213,6 +240,9 @@ class MapStore {
   CollectionState* FindCollection(const std::string& collection) const;
   Result<internal::IndexedMap> ReadIndexed(const std::string& key) const;
   Result<v1::MapMetadata> ReadMetadata(const std::string& key) const;
+  // The kept record of an insert request id, if any.
+  Result<std::optional<internal::InsertRequestRecord>> ReadRequest(const std::string& collection,
+                                                                   const std::string& request_id) const;
 
   rocksdb::DB* db_ = nullptr;
   rocksdb::ColumnFamilyHandle* maps_cf_ = nullptr;
@@ -221,6 +251,7 @@ class MapStore {
   rocksdb::ColumnFamilyHandle* postings_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* collections_cf_ = nullptr;
   rocksdb::ColumnFamilyHandle* meta_cf_ = nullptr;
+  rocksdb::ColumnFamilyHandle* requests_cf_ = nullptr;
   bool sync_writes_ = false;
   std::string data_dir_;
   IndexingConfig indexing_;

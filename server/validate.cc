@@ -177,6 +177,14 @@ Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& c
   return ValidateLocalMap(request.map(), config, where);
 }
 
+Status ValidateRequestId(const std::string& request_id) {
+  const bool printable = std::all_of(request_id.begin(), request_id.end(), [](char c) { return c > ' ' && c <= '~'; });
+  if (request_id.size() > 64 || !printable) {
+    return Status::InvalidArgument("request_id must be at most 64 printable ASCII characters without spaces");
+  }
+  return Status::Ok();
+}
+
 Status ValidatePriorAndSequence(bool has_prior, const v1::Prior& prior,
                                 const google::protobuf::RepeatedPtrField<v1::SequenceMap>& sequence,
                                 const ServerConfig& config) {

@@ -32,6 +32,10 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
 // Metadata and map of one map to insert; `index` is its place in the batch.
 Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index);
 
+// An insert's request id: empty, or 1 to 64 printable ASCII characters
+// without spaces.
+Status ValidateRequestId(const std::string& request_id);
+
 // A query's prior (if set) and sequence: not both; a prior's pose finite
 // within the coordinate limit, a radius in (0, 100] m, a heading sigma >= 0;
 // at most max_sequence_maps earlier maps, each a valid local map with its

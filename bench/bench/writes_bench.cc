@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <set>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -51,19 +51,25 @@ int Write(const std::vector<std::string>& servers, const std::string& collection
   auto last_ack = start;
   for (size_t i = 0; i < maps.size(); ++i) {
     std::this_thread::sleep_until(start + std::chrono::microseconds(static_cast<int64_t>(i * 1e6 / rate)));
+    // lmdd assigns the id; the request id makes the retries below safe, and
+    // the write's number (as the map's sequence) lets --verify find a map
+    // stored twice under two ids.
     char id[32];
     std::snprintf(id, sizeof id, "w%08zu", i);
     v1::InsertMapsRequest request;
+    request.set_request_id(id);
     v1::InsertMapRequest* insert = request.add_maps();
     insert->mutable_metadata()->set_collection(collection);
-    insert->mutable_metadata()->set_map_id(id);
+    insert->mutable_metadata()->set_robot_id("lmd-bench-writes");
+    insert->mutable_metadata()->set_sequence(i + 1);
     *insert->mutable_map() = ToProto(maps[i]);
+    v1::InsertMapsResponse response;
     for (;;) {
       grpc::ClientContext context;
       context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(3));
-      v1::InsertMapsResponse response;
+      response.Clear();
       const grpc::Status status = stubs[server]->InsertMaps(&context, request, &response);
-      if (status.ok()) break;
+      if (status.ok() && response.maps_size() == 1) break;
       ++failures;
       if (failures <= 20 || failures % 50 == 0) {
         std::fprintf(stderr, "write %s to %s: %s\n", id, servers[server].c_str(), status.error_message().c_str());
@@ -78,7 +84,7 @@ int Write(const std::vector<std::string>& servers, const std::string& collection
     const auto now = Clock::now();
     longest_gap_s = std::max(longest_gap_s, std::chrono::duration<double>(now - last_ack).count());
     last_ack = now;
-    acked << id << '\n' << std::flush;
+    acked << response.maps(0).map_id() << ' ' << i + 1 << '\n' << std::flush;
     ++count;
   }
   const double took = std::chrono::duration<double>(Clock::now() - start).count();
@@ -90,14 +96,13 @@ int Write(const std::vector<std::string>& servers, const std::string& collection
 int Verify(const std::vector<std::string>& servers, const std::string& collection, const std::string& acked_path,
            size_t copies_needed) {
   std::ifstream in(acked_path);
-  std::set<std::string> acked;
-  for (std::string id; std::getline(in, id);) {
-    if (!id.empty()) acked.insert(id);
-  }
+  std::map<std::string, uint64_t> acked;  // map id -> write number
+  std::string id;
+  for (uint64_t number = 0; in >> id >> number;) acked[id] = number;
   size_t complete = 0;
   for (const std::string& address : servers) {
     std::unique_ptr<v1::LmdService::Stub> stub = StubFor(address);
-    std::multiset<std::string> held;
+    std::map<std::string, uint64_t> held;  // map id -> write number
     std::string page;
     bool ok = true;
     for (;;) {
@@ -115,14 +120,20 @@ int Verify(const std::vector<std::string>& servers, const std::string& collectio
         ok = false;
         break;
       }
-      for (const v1::MapMetadata& m : response.maps()) held.insert(m.map_id());
+      for (const v1::MapMetadata& m : response.maps()) held[m.map_id()] = m.sequence();
       if (response.next_page_token().empty()) break;
       page = response.next_page_token();
     }
     if (!ok) continue;
+    // Missing: an acknowledged id not held as that write; duplicated: a write
+    // held under more than one id (a retry stored twice).
     size_t missing = 0, duplicates = 0;
-    for (const std::string& id : acked) missing += held.count(id) == 0;
-    for (auto it = held.begin(); it != held.end(); it = held.upper_bound(*it)) duplicates += held.count(*it) > 1;
+    for (const auto& [map_id, number] : acked) {
+      const auto it = held.find(map_id);
+      missing += it == held.end() || it->second != number;
+    }
+    std::map<uint64_t, int> copies_of;
+    for (const auto& [map_id, number] : held) duplicates += ++copies_of[number] == 2;
     std::printf("%s: holds %zu maps; %zu of %zu acknowledged missing, %zu duplicated\n", address.c_str(), held.size(),
                 missing, acked.size(), duplicates);
     complete += missing == 0 && duplicates == 0;

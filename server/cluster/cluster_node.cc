@@ -421,17 +421,24 @@ Status ClusterNode::WriteAsPrimary(const std::string& collection,
   write.set_prev_epoch(last.epoch);
   Status applied = apply(mark, &write);
   if (!applied.ok()) return applied;
+  if (write.maps_size() == 0 && write.deleted_map_ids_size() == 0) return Status::Ok();  // nothing written
   Status copied = Replicate(collection, *placement, write);
   writer.log.Append(std::move(write));
   return copied;
 }
 
 Status ClusterNode::Insert(const std::string& collection, std::vector<MapWrite>* maps, const InsertLimits& limits,
-                           std::vector<v1::MapMetadata>* evicted) {
+                           std::vector<v1::MapMetadata>* evicted, const InsertRequestId* request, bool* replayed) {
   return WriteAsPrimary(collection, [&](const ReplicationMark& mark, internal::ApplyRequest* write) {
     std::vector<v1::MapMetadata> gone;
-    Status stored = store_->InsertMaps(maps, limits, &gone, &mark);
-    if (!stored.ok()) return stored;
+    bool answered = false;
+    Status stored = store_->InsertMaps(maps, limits, &gone, &mark, request, &answered);
+    if (replayed != nullptr) *replayed = answered;
+    if (!stored.ok() || answered) return stored;  // a replay writes nothing: no copy to make
+    if (request != nullptr) {
+      write->set_request_id(request->id);
+      write->set_request_fingerprint(request->fingerprint);
+    }
     for (const MapWrite& m : *maps) *write->add_maps() = ToReplicated(m);
     for (const v1::MapMetadata& meta : gone) write->add_deleted_map_ids(meta.map_id());
     if (evicted != nullptr) evicted->insert(evicted->end(), gone.begin(), gone.end());
@@ -568,15 +575,19 @@ Status ClusterNode::Apply(const internal::ApplyRequest& write, internal::ApplyRe
   // between repeats the whole write (inserts replace, deletes of absent maps
   // are skipped).
   const bool deletes = write.deleted_map_ids_size() > 0;
+  bool replayed = false;  // kept already (a repeated write): its mark is still to set
   if (!maps.empty()) {
-    Status stored = store_->InsertMaps(&maps, InsertLimits{~0u, 0}, nullptr, deletes ? nullptr : &mark);
+    InsertLimits limits{~0u, 0, config_.insert_request_ids_kept};
+    const InsertRequestId request{write.request_id(), write.request_fingerprint()};
+    Status stored = store_->InsertMaps(&maps, limits, nullptr, deletes ? nullptr : &mark,
+                                       write.request_id().empty() ? nullptr : &request, &replayed);
     if (!stored.ok()) return stored;
   }
   for (const std::string& id : write.deleted_map_ids()) {
     Status deleted = store_->DeleteMap(write.collection(), id);
     if (!deleted.ok() && deleted.code() != Status::Code::kNotFound) return deleted;
   }
-  if (deletes || maps.empty()) {
+  if (deletes || maps.empty() || replayed) {
     Status marked = store_->SetMark(write.collection(), mark);
     if (!marked.ok()) return marked;
   }
@@ -606,6 +617,15 @@ Status ClusterNode::Copy(const std::string& collection, const std::function<bool
           *m->mutable_map() = std::move(e.map);
           m->set_lmd(e.indexed.lmd());
           m->set_place_features(e.indexed.place_features());
+        }
+        return send(chunk);
+      },
+      [&](std::vector<KeptRequest>&& requests) {
+        internal::CopyChunk chunk;
+        for (KeptRequest& r : requests) {
+          internal::KeptRequest* kept = chunk.add_requests();
+          kept->set_request_id(std::move(r.id));
+          *kept->mutable_record() = std::move(r.record);
         }
         return send(chunk);
       },
@@ -778,6 +798,7 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
   } untrack{this};
   std::unique_ptr<grpc::ClientReader<internal::CopyChunk>> reader = stub->Copy(&context, request);
   std::unordered_set<std::string> kept;
+  std::vector<KeptRequest> requests;
   internal::CopyChunk chunk;
   bool complete = false;
   while (reader->Read(&chunk)) {
@@ -786,6 +807,9 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
       complete = true;
       continue;
     }
+    for (internal::KeptRequest& r : *chunk.mutable_requests()) {
+      requests.push_back({std::move(*r.mutable_request_id()), std::move(*r.mutable_record())});
+    }
     std::vector<MapWrite> maps;
     for (const internal::ReplicatedMap& m : chunk.maps()) {
       Result<MapWrite> map = FromReplicated(m);
@@ -793,6 +817,7 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
       kept.insert(m.map().metadata().map_id());
       maps.push_back(std::move(map).value());
     }
+    if (maps.empty()) continue;
     Status stored = store_->InsertMaps(&maps, InsertLimits{~0u, 0});
     if (!stored.ok()) return stored;
   }
@@ -816,7 +841,7 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
     Status deleted = store_->DeleteMap(collection, id);
     if (!deleted.ok() && deleted.code() != Status::Code::kNotFound) return deleted;
   }
-  return store_->SetMark(collection, *mark);
+  return store_->SetMark(collection, *mark, &requests);
 }
 
 void ClusterNode::Describe(v1::ClusterResponse* out) const {

@@ -82,7 +82,8 @@ class ClusterNode {
   // On the primary (ForWrite said here): the write applied here and on
   // every in-sync copy, as MapStore::InsertMaps / DeleteMap.
   Status Insert(const std::string& collection, std::vector<MapWrite>* maps, const InsertLimits& limits,
-                std::vector<v1::MapMetadata>* evicted);
+                std::vector<v1::MapMetadata>* evicted, const InsertRequestId* request = nullptr,
+                bool* replayed = nullptr);
   Status Delete(const std::string& collection, const std::string& map_id);
 
   // The Replica service (replica_service.h).

@@ -135,6 +135,28 @@ TEST_F(ClusterTest, EveryAcknowledgedWriteIsOnEveryCopyAndOutlivesItsPrimary) {
   EXPECT_TRUE(Serving(1));  // readiness: SERVING once its copy caught up
 }
 
+TEST_F(ClusterTest, AnInsertRetriedAfterItsPrimaryDiedIsStoredOnce) {
+  v1::InsertMapsRequest request = OneMapRequest("site", "", SquareRoomMap(12));  // lmdd assigns the id
+  request.set_request_id("robot-7-tick-1");
+  v1::InsertMapsResponse first;
+  ASSERT_TRUE(ClientOf(1)->InsertMaps(request, &first).ok());  // node 1 becomes the primary
+  nodes_[1]->Shutdown(std::chrono::milliseconds(0));  // its answer "lost": the robot retries elsewhere
+  nodes_[1].reset();
+  v1::InsertMapsResponse again;
+  grpc::Status retried;
+  const auto give_up = Clock::now() + std::chrono::seconds(10);
+  do {
+    again.Clear();
+    retried = ClientOf(0)->InsertMaps(request, &again);
+  } while (!retried.ok() && Clock::now() < give_up);
+  ASSERT_TRUE(retried.ok()) << retried.error_message();
+  EXPECT_TRUE(again.replayed());
+  ASSERT_EQ(again.maps_size(), 1);
+  EXPECT_EQ(again.maps(0).map_id(), first.maps(0).map_id());
+  EXPECT_EQ(Held(0), std::set<std::string>{first.maps(0).map_id()});
+  EXPECT_EQ(Held(2), std::set<std::string>{first.maps(0).map_id()});
+}
+
 TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
   ASSERT_TRUE(Insert("m1", 2));
   // Every node answers reads and writes for the collection, whichever is its primary.
