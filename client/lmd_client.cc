@@ -199,6 +199,12 @@ grpc::Status LmdClient::Cluster(v1::ClusterResponse* response) const {
   return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Cluster(c, request, response); });
 }
 
+grpc::Status LmdClient::SetReplication(const v1::SetReplicationRequest& request,
+                                       v1::SetReplicationResponse* response) const {
+  return WithRetries(request.collection(),
+                     [&](grpc::ClientContext* c) { return stub_->SetReplication(c, request, response); });
+}
+
 grpc::Status LmdClient::Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const {
   // Not retried: a lost answer would make the retry fail on the directory
   // the first attempt created.

@@ -85,6 +85,7 @@ class LmdClient {
   grpc::Status Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const;
   // The cluster as the node answering sees it (enabled = false: a single node).
   grpc::Status Cluster(v1::ClusterResponse* response) const;
+  grpc::Status SetReplication(const v1::SetReplicationRequest& request, v1::SetReplicationResponse* response) const;
 
  private:
   explicit LmdClient(const ClientOptions& options) : options_(options) {}

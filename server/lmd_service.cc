@@ -30,6 +30,7 @@ Status DistinctIds(const v1::InsertMapsRequest& request) {
 }
 
 constexpr uint32_t kDefaultPageSize = 1000;
+constexpr uint32_t kMaxReplicationFactor = 9;  // copies of one collection: more only slow its writes
 constexpr size_t kRecentFixes = 4096;  // sure localisations remembered to anchor the maps inserted next
 
 // Validates the lookup key of a get / delete.
@@ -307,6 +308,25 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Cluster(grpc::CallbackServerContext* c
   return runner_->Unary(context, "Cluster", "", runner_->AuthorizeServerWide(context, Access::kRead), [=] {
     if (cluster_ != nullptr) cluster_->Describe(response);
     return Status::Ok();
+  });
+}
+
+grpc::ServerUnaryReactor* LmdServiceImpl::SetReplication(grpc::CallbackServerContext* context,
+                                                         const v1::SetReplicationRequest* request,
+                                                         v1::SetReplicationResponse* response) {
+  return runner_->Unary(context, "SetReplication", request->collection(),
+                        runner_->Authorize(context, request->collection(), Access::kWrite), [=] {
+    Status valid = ValidateCollectionName(request->collection());
+    if (!valid.ok()) return valid;
+    if (request->replication_factor() < 1 || request->replication_factor() > kMaxReplicationFactor) {
+      return Status::InvalidArgument("replication_factor must be 1 to " + std::to_string(kMaxReplicationFactor) +
+                                     ", not " + std::to_string(request->replication_factor()));
+    }
+    if (cluster_ == nullptr) {
+      return Status::FailedPrecondition("this lmdd runs alone (cluster_etcd is not set): it keeps one copy");
+    }
+    return cluster_->SetReplication(request->collection(), request->replication_factor(),
+                                    response->mutable_placement());
   });
 }
 

@@ -51,6 +51,9 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
                                           v1::DetectChangesResponse* response) override;
   grpc::ServerUnaryReactor* Cluster(grpc::CallbackServerContext* context, const v1::ClusterRequest* request,
                                     v1::ClusterResponse* response) override;
+  grpc::ServerUnaryReactor* SetReplication(grpc::CallbackServerContext* context,
+                                           const v1::SetReplicationRequest* request,
+                                           v1::SetReplicationResponse* response) override;
 
   // In a cluster (server/cluster): calls on collections this node does not
   // serve are forwarded, and writes are replicated. `node` outlives the service.

@@ -27,6 +27,7 @@ constexpr char kUsage[] =
     "  export-map --collection C --out MAP.yaml [--id ID]          anchored maps (or one map) as a Nav2 map (YAML + PGM)\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  cluster                                                     nodes, each collection's copies, in-sync sets and lag\n"
+    "  cluster --collection C --copies N                           keep N copies of C (1 to 9) in the cluster\n"
     "  demo [--collection C] [--out DIR]                           store a simulated robot's run, localise another's\n"
     "  backup --dir DIR                                            consistent copy of lmdd's store into DIR (on the server)\n"
     "QUERY is --file POINTS, --log FILE --map K or --bag PATH --map K; M is default, lmd-cor, lmd-cog or bow;\n"
@@ -101,7 +102,7 @@ int Main(int argc, char** argv) {
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
               "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
               "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution", "prior", "prior-sigma",
-              "sequence", "sequence-step"});
+              "sequence", "sequence-step", "copies"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

@@ -62,7 +62,28 @@ int BackupCommand(const CommandContext& ctx) {
   return 0;
 }
 
+// `cluster --collection C --copies N`: how many copies the cluster keeps.
+int SetReplication(const CommandContext& ctx) {
+  v1::SetReplicationRequest request;
+  request.set_collection(Required(ctx.args, "collection"));
+  if (request.collection().empty()) return 2;
+  Result<long> copies = GetPositive(ctx.args, "copies", 0, 9);
+  if (!copies.ok()) return Fail(copies.status().message(), 2);
+  request.set_replication_factor(static_cast<uint32_t>(*copies));
+  v1::SetReplicationResponse response;
+  const grpc::Status status = ctx.client.SetReplication(request, &response);
+  if (!status.ok()) return FailCall(status);
+  if (ctx.json) {
+    std::printf("%s\n", ToJsonLine(response).c_str());
+  } else {
+    std::printf("collection %s: %u copies wanted (now %d); the controller adds or removes copies\n",
+                request.collection().c_str(), request.replication_factor(), response.placement().copies_size());
+  }
+  return 0;
+}
+
 int ClusterCommand(const CommandContext& ctx) {
+  if (ctx.args.Has("copies")) return SetReplication(ctx);
   v1::ClusterResponse response;
   const grpc::Status status = ctx.client.Cluster(&response);
   if (!status.ok()) return FailCall(status);
@@ -80,8 +101,8 @@ int ClusterCommand(const CommandContext& ctx) {
                 node.zone().empty() ? "" : " zone ", node.zone().c_str());
   }
   for (const auto& placement : response.placements()) {
-    std::printf("collection %-20s epoch %llu\n", placement.collection().c_str(),
-                static_cast<unsigned long long>(placement.epoch()));
+    std::printf("collection %-20s epoch %llu, %u copies wanted\n", placement.collection().c_str(),
+                static_cast<unsigned long long>(placement.epoch()), placement.copies_wanted());
     for (const auto& copy : placement.copies()) {
       const char* role = copy.primary() ? "primary" : copy.in_sync() ? "in sync" : "catching up";
       if (copy.reachable()) {

@@ -844,6 +844,27 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
   return store_->SetMark(collection, *mark, &requests);
 }
 
+Status ClusterNode::SetReplication(const std::string& collection, uint32_t copies, v1::ClusterPlacement* out) {
+  Result<internal::Placement> changed = ChangePlacement(
+      collection, [](const internal::Placement&) { return true; },
+      [&](internal::Placement* p) { p->set_replication_factor(copies); });
+  if (!changed.ok()) {
+    if (changed.status().code() != Status::Code::kNotFound) return changed.status();
+    return Status::NotFound("collection '" + collection + "' has no placement: write to it first");
+  }
+  spdlog::info("cluster: '{}' wants {} copies", collection, copies);
+  out->set_collection(collection);
+  out->set_epoch(changed->epoch());
+  out->set_copies_wanted(copies);
+  for (const std::string& id : changed->replicas()) {
+    v1::ClusterCopy* copy = out->add_copies();
+    copy->set_node_id(id);
+    copy->set_primary(id == changed->primary());
+    copy->set_in_sync(InSync(*changed, id));
+  }
+  return Status::Ok();
+}
+
 void ClusterNode::Describe(v1::ClusterResponse* out) const {
   out->set_enabled(true);
   out->set_node_id(node_id_);
@@ -867,6 +888,7 @@ void ClusterNode::Describe(v1::ClusterResponse* out) const {
     v1::ClusterPlacement* wire = out->add_placements();
     wire->set_collection(name);
     wire->set_epoch(p.epoch());
+    wire->set_copies_wanted(static_cast<uint32_t>(WantedCopies(p, config_.cluster_replication_factor)));
     uint64_t primary_seq = 0;
     for (const std::string& id : p.replicas()) {
       v1::ClusterCopy* copy = wire->add_copies();

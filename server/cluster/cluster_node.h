@@ -102,6 +102,9 @@ class ClusterNode {
 
   // Nodes and placements as this node sees them, with each copy's lag.
   void Describe(v1::ClusterResponse* out) const;
+  // Sets the copies wanted of a placed collection (NotFound if unplaced);
+  // the controller then adds or removes copies. *out: the placement written.
+  Status SetReplication(const std::string& collection, uint32_t copies, v1::ClusterPlacement* out);
 
   // The channel to another node (TLS with this node's certificate when lmdd
   // serves TLS), shared by every call there.

@@ -1,6 +1,7 @@
 #include "server/cluster/placement.h"
 
 #include <algorithm>
+#include <tuple>
 #include <vector>
 
 #include "core/util/fnv1a.h"
@@ -60,7 +61,35 @@ void AddSpares(const std::string& collection, const LiveNodes& live, size_t want
   }
 }
 
+// Removes replicas beyond `wanted` (Repaired says which), only while at
+// least `wanted` copies stay in sync.
+void Trim(const std::string& collection, const LiveNodes& live, size_t wanted, internal::Placement* placement) {
+  if (static_cast<size_t>(placement->in_sync_size()) < wanted) return;
+  std::vector<std::string> leaving;  // the first to leave first
+  for (const std::string& id : placement->replicas()) {
+    if (id != placement->primary()) leaving.push_back(id);
+  }
+  auto order = [&](const std::string& id) {
+    const bool in_sync = Contains(placement->in_sync(), id);
+    return std::make_tuple(in_sync, live.count(id) != 0, Rank(collection, id));
+  };
+  std::sort(leaving.begin(), leaving.end(), [&](const std::string& a, const std::string& b) { return order(a) < order(b); });
+  for (const std::string& id : leaving) {
+    if (static_cast<size_t>(placement->replicas_size()) <= wanted) return;
+    const bool in_sync = Contains(placement->in_sync(), id);
+    if (in_sync && static_cast<size_t>(placement->in_sync_size()) <= wanted) return;
+    for (auto* list : {placement->mutable_replicas(), placement->mutable_in_sync()}) {
+      list->erase(std::remove(list->begin(), list->end(), id), list->end());
+    }
+  }
+}
+
 }  // namespace
+
+size_t WantedCopies(const internal::Placement& placement, size_t default_replication_factor) {
+  return std::max<size_t>(1, placement.replication_factor() > 0 ? placement.replication_factor()
+                                                                  : default_replication_factor);
+}
 
 internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
                                  size_t replication_factor, bool others_in_sync) {
@@ -76,7 +105,8 @@ internal::Placement NewPlacement(const std::string& collection, const LiveNodes&
 }
 
 std::optional<internal::Placement> Repaired(const std::string& collection, const internal::Placement& current,
-                                            const LiveNodes& live, size_t replication_factor) {
+                                            const LiveNodes& live, size_t default_replication_factor) {
+  const size_t wanted = WantedCopies(current, default_replication_factor);
   internal::Placement next = current;
   auto alive = [&](const std::string& id) { return live.count(id) != 0; };
   if (!alive(current.primary())) {
@@ -94,7 +124,8 @@ std::optional<internal::Placement> Repaired(const std::string& collection, const
     if (id != next.primary() && alive(id)) next.add_in_sync(id);
   }
   if (!alive(next.primary())) return std::nullopt;  // no live copy to promote: wait for one
-  AddSpares(collection, live, std::max<size_t>(1, replication_factor), /*in_sync=*/false, &next);
+  AddSpares(collection, live, wanted, /*in_sync=*/false, &next);
+  Trim(collection, live, wanted, &next);
   if (next.SerializeAsString() == current.SerializeAsString()) return std::nullopt;
   return next;
 }

@@ -32,10 +32,19 @@ internal::Placement NewPlacement(const std::string& collection, const LiveNodes&
 //   one of its in-sync nodes returns);
 // - dead nodes leave the in-sync set (they stay replicas and catch up when
 //   they return);
-// - while fewer than replication_factor replicas are live, live nodes that
-//   hold no copy join as replicas (not in sync: they copy the collection).
+// - while fewer than the copies wanted are live, live nodes that hold no
+//   copy join as replicas (not in sync: they copy the collection);
+// - beyond the copies wanted (a lowered factor, or a node back after its
+//   replacement caught up), replicas leave once that many are in sync: dead
+//   ones first, then those catching up, then the lowest-ranked in-sync
+//   ones, never the primary.
+// The copies wanted: the placement's replication_factor, else
+// `default_replication_factor`.
 std::optional<internal::Placement> Repaired(const std::string& collection, const internal::Placement& current,
-                                            const LiveNodes& live, size_t replication_factor);
+                                            const LiveNodes& live, size_t default_replication_factor);
+
+// The copies a placement wants.
+size_t WantedCopies(const internal::Placement& placement, size_t default_replication_factor);
 
 // Whether `node` is in the placement's in-sync set.
 bool InSync(const internal::Placement& placement, const std::string& node);

@@ -157,6 +157,36 @@ TEST_F(ClusterTest, AnInsertRetriedAfterItsPrimaryDiedIsStoredOnce) {
   EXPECT_EQ(Held(2), std::set<std::string>{first.maps(0).map_id()});
 }
 
+TEST_F(ClusterTest, ACollectionKeepsTheCopiesItIsSetTo) {
+  ASSERT_TRUE(Insert("m1", 0));
+  auto client = ClientOf(2);
+  v1::SetReplicationRequest request;
+  request.set_collection("site");
+  request.set_replication_factor(1);
+  v1::SetReplicationResponse set;
+  ASSERT_TRUE(client->SetReplication(request, &set).ok());
+  EXPECT_EQ(set.placement().copies_wanted(), 1u);
+  auto copies = [&] {
+    v1::ClusterResponse cluster;
+    EXPECT_TRUE(client->Cluster(&cluster).ok());
+    return cluster.placements_size() == 1 ? cluster.placements(0).copies_size() : -1;
+  };
+  const auto give_up = Clock::now() + std::chrono::seconds(10);
+  while (copies() != 1 && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(copies(), 1) << "the controller did not remove the two other copies";
+  ASSERT_TRUE(Insert("m2", 1));  // one copy takes writes on its own
+  EXPECT_EQ(Held(0), (std::set<std::string>{"m1", "m2"}));
+
+  request.set_replication_factor(0);
+  EXPECT_EQ(client->SetReplication(request, &set).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  request.set_replication_factor(2);
+  request.set_collection("never-written");
+  EXPECT_EQ(client->SetReplication(request, &set).error_code(), grpc::StatusCode::NOT_FOUND);
+  TempDir alone_dir;
+  TestServer alone(alone_dir.path());
+  EXPECT_EQ(alone.client().SetReplication(request, &set).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+}
+
 TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
   ASSERT_TRUE(Insert("m1", 2));
   // Every node answers reads and writes for the collection, whichever is its primary.

@@ -87,6 +87,40 @@ TEST(PlacementTest, ALiveNodeJoinsAnUnderReplicatedCollectionAsACatchingUpCopy) 
   EXPECT_EQ(next->epoch(), p.epoch());
 }
 
+TEST(PlacementTest, ACollectionsOwnFactorOverridesTheClustersBothWays) {
+  const LiveNodes live = Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}, {"n4", ""}});
+  internal::Placement p = NewPlacement("site", live, "n1", 3);
+  p.set_replication_factor(4);
+  std::optional<internal::Placement> next = Repaired("site", p, live, 3);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->replicas_size(), 4);  // the fourth copies the collection before it counts
+  EXPECT_EQ(next->in_sync_size(), 3);
+
+  p.set_replication_factor(1);  // lowered: the copies other than the primary leave
+  next = Repaired("site", p, live, 3);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(List(next->replicas()), std::vector<std::string>{"n1"});
+  EXPECT_EQ(List(next->in_sync()), std::vector<std::string>{"n1"});
+  EXPECT_EQ(WantedCopies(*next, 3), 1u);
+}
+
+TEST(PlacementTest, ADeadCopyLeavesOnlyOnceItsReplacementCaughtUp) {
+  internal::Placement p = NewPlacement("site", Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}}), "n1", 3);
+  const LiveNodes without_n3 = Nodes({{"n1", ""}, {"n2", ""}, {"n4", ""}});
+  std::optional<internal::Placement> next = Repaired("site", p, without_n3, 3);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->replicas_size(), 4);  // n3 stays while n4 copies: only two copies are in sync
+  EXPECT_FALSE(InSync(*next, "n4"));
+  p = *next;
+  p.add_in_sync("n4");  // n4 caught up
+  next = Repaired("site", p, without_n3, 3);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(List(next->replicas()), (std::vector<std::string>{"n1", "n2", "n4"}));
+  EXPECT_EQ(next->in_sync_size(), 3);
+  // n3 back: the collection has its copies, n3 is not asked for one again.
+  EXPECT_FALSE(Repaired("site", *next, Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}, {"n4", ""}}), 3));
+}
+
 internal::ApplyRequest Write(uint64_t epoch, uint64_t seq) {
   internal::ApplyRequest w;
   w.set_epoch(epoch);
