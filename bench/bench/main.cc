@@ -6,6 +6,7 @@
 #include "bench/bench/index_bench.h"
 #include "bench/bench/load_bench.h"
 #include "bench/bench/places_bench.h"
+#include "bench/bench/reads_bench.h"
 #include "bench/bench/writes_bench.h"
 
 int main(int argc, char** argv) {
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   if (command == "fill") return lmd::bench::RunFillBench(argc - 2, argv + 2);
   if (command == "places") return lmd::bench::RunPlacesBench(argc - 2, argv + 2);
   if (command == "writes") return lmd::bench::RunWritesBench(argc - 2, argv + 2);
+  if (command == "reads") return lmd::bench::RunReadsBench(argc - 2, argv + 2);
   if (command.empty() || command == "-h" || command == "--help") {
     std::printf("usage: lmd-bench <command> [options]\n"
                 "commands:\n"
@@ -27,7 +29,9 @@ int main(int argc, char** argv) {
                 "                                          store N simulated maps (scale runs)\n"
                 "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n"
                 "  writes --servers A,B,C --collection C --rate R --seconds S --acked FILE\n"
-                "       [--verify [--copies N]]            inserts through node failures; check nothing acknowledged is lost\n");
+                "       [--verify [--copies N]]            inserts through node failures; check nothing acknowledged is lost\n"
+                "  reads --servers A[,B,...] --collection C [--threads T] [--seconds S]\n"
+                "                                          query throughput, the queries spread over the servers\n");
     return command.empty() ? 2 : 0;
   }
   std::fprintf(stderr, "lmd-bench: unknown command '%s' (try --help)\n", command.c_str());
