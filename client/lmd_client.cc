@@ -16,6 +16,8 @@
 namespace lmd::client {
 namespace {
 
+using Stub = v1::LmdService::Stub;
+
 Result<std::string> ReadPem(const std::string& path) {
   std::ifstream in(path);
   if (!in) return Status::InvalidArgument("cannot read " + path);
@@ -83,6 +85,13 @@ Result<std::unique_ptr<LmdClient>> LmdClient::Create(const ClientOptions& option
   if (!options.tls_server_name.empty()) args.SetSslTargetNameOverride(options.tls_server_name);
   std::unique_ptr<LmdClient> client(new LmdClient(options));
   client->stub_ = v1::LmdService::NewStub(grpc::CreateCustomChannel(options.target, *credentials, args));
+  if (options.route) {
+    const std::string token = options.token;
+    client->routes_ = std::make_unique<ClusterRoutes>(options.target, *credentials, args, [token](grpc::ClientContext* c) {
+      c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+      if (!token.empty()) c->AddMetadata("authorization", "Bearer " + token);
+    });
+  }
   return client;
 }
 
@@ -96,15 +105,16 @@ std::unique_ptr<grpc::ClientContext> LmdClient::NewContext(const std::string& co
   return context;
 }
 
-grpc::Status LmdClient::WithRetries(const std::string& collection,
-                                    const std::function<grpc::Status(grpc::ClientContext*)>& call, bool retry,
-                                    int* attempts) const {
+grpc::Status LmdClient::WithRetries(const std::string& collection, const Call& call, bool retry, int* attempts,
+                                    bool write) const {
   const auto deadline = std::chrono::system_clock::now() + options_.deadline;
   auto backoff = options_.initial_backoff;
   for (int attempt = 1;; ++attempt) {
     if (attempts != nullptr) *attempts = attempt;
     auto context = NewContext(collection, deadline);
-    const grpc::Status status = call(context.get());
+    Stub* stub = routes_ ? routes_->For(collection, write) : stub_.get();
+    const grpc::Status status = call(context.get(), stub);
+    if (routes_ && status.error_code() == grpc::StatusCode::UNAVAILABLE) routes_->Failed(stub);
     const auto wait = Jittered(backoff);
     if (!retry || !Retryable(status, *context) || attempt >= options_.max_attempts ||
         std::chrono::system_clock::now() + wait >= deadline) {
@@ -128,14 +138,17 @@ grpc::Status LmdClient::InsertMaps(const v1::InsertMapsRequest& request, v1::Ins
     with_id.set_request_id(RandomRequestId());
     sent = &with_id;
   }
-  return WithRetries(collection, [&](grpc::ClientContext* c) { return stub_->InsertMaps(c, *sent, response); });
+  return WithRetries(
+      collection, [&](grpc::ClientContext* c, Stub* s) { return s->InsertMaps(c, *sent, response); }, true, nullptr,
+      /*write=*/true);
 }
 
 grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
                                          v1::InsertMapsResponse* response) const {
   const std::string collection = requests.empty() ? "" : requests.front().metadata().collection();
   auto context = NewContext(collection, std::chrono::system_clock::now() + options_.deadline);
-  auto writer = stub_->StreamInsertMaps(context.get(), response);
+  Stub* stub = routes_ ? routes_->For(collection, /*write=*/true) : stub_.get();  // a stream goes to the primary
+  auto writer = stub->StreamInsertMaps(context.get(), response);
   for (const auto& request : requests) {
     if (!writer->Write(request)) break;  // the server ended the stream; Finish says why
   }
@@ -154,15 +167,15 @@ grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>
 }
 
 grpc::Status LmdClient::GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const {
-  return WithRetries(request.collection(), [&](grpc::ClientContext* c) { return stub_->GetMap(c, request, response); });
+  return WithRetries(request.collection(), [&](grpc::ClientContext* c, Stub* s) { return s->GetMap(c, request, response); });
 }
 
 grpc::Status LmdClient::DeleteMap(const v1::DeleteMapRequest& request) const {
   v1::DeleteMapResponse response;
   int attempts = 0;
   const grpc::Status status = WithRetries(
-      request.collection(), [&](grpc::ClientContext* c) { return stub_->DeleteMap(c, request, &response); }, true,
-      &attempts);
+      request.collection(), [&](grpc::ClientContext* c, Stub* s) { return s->DeleteMap(c, request, &response); }, true,
+      &attempts, /*write=*/true);
   // A retry that finds the map gone: an earlier attempt deleted it.
   if (status.error_code() == grpc::StatusCode::NOT_FOUND && attempts > 1) return grpc::Status::OK;
   return status;
@@ -170,45 +183,45 @@ grpc::Status LmdClient::DeleteMap(const v1::DeleteMapRequest& request) const {
 
 grpc::Status LmdClient::ListMaps(const v1::ListMapsRequest& request, v1::ListMapsResponse* response) const {
   return WithRetries(request.collection(),
-                     [&](grpc::ClientContext* c) { return stub_->ListMaps(c, request, response); });
+                     [&](grpc::ClientContext* c, Stub* s) { return s->ListMaps(c, request, response); });
 }
 
 grpc::Status LmdClient::Retrieve(const v1::RetrieveRequest& request, v1::RetrieveResponse* response) const {
   return WithRetries(request.collection(),
-                     [&](grpc::ClientContext* c) { return stub_->Retrieve(c, request, response); });
+                     [&](grpc::ClientContext* c, Stub* s) { return s->Retrieve(c, request, response); });
 }
 
 grpc::Status LmdClient::DetectChanges(const v1::DetectChangesRequest& request,
                                       v1::DetectChangesResponse* response) const {
   return WithRetries(request.collection(),
-                     [&](grpc::ClientContext* c) { return stub_->DetectChanges(c, request, response); });
+                     [&](grpc::ClientContext* c, Stub* s) { return s->DetectChanges(c, request, response); });
 }
 
 grpc::Status LmdClient::ListCollections(v1::ListCollectionsResponse* response) const {
-  return WithRetries("", [&](grpc::ClientContext* c) {
-    return stub_->ListCollections(c, v1::ListCollectionsRequest(), response);
+  return WithRetries("", [&](grpc::ClientContext* c, Stub* s) {
+    return s->ListCollections(c, v1::ListCollectionsRequest(), response);
   });
 }
 
 grpc::Status LmdClient::Stats(const v1::StatsRequest& request, v1::StatsResponse* response) const {
-  return WithRetries(request.collection(), [&](grpc::ClientContext* c) { return stub_->Stats(c, request, response); });
+  return WithRetries(request.collection(), [&](grpc::ClientContext* c, Stub* s) { return s->Stats(c, request, response); });
 }
 
 grpc::Status LmdClient::Cluster(v1::ClusterResponse* response) const {
   const v1::ClusterRequest request;
-  return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Cluster(c, request, response); });
+  return WithRetries("", [&](grpc::ClientContext* c, Stub* s) { return s->Cluster(c, request, response); });
 }
 
 grpc::Status LmdClient::SetReplication(const v1::SetReplicationRequest& request,
                                        v1::SetReplicationResponse* response) const {
   return WithRetries(request.collection(),
-                     [&](grpc::ClientContext* c) { return stub_->SetReplication(c, request, response); });
+                     [&](grpc::ClientContext* c, Stub* s) { return s->SetReplication(c, request, response); });
 }
 
 grpc::Status LmdClient::Backup(const v1::BackupRequest& request, v1::BackupResponse* response) const {
   // Not retried: a lost answer would make the retry fail on the directory
   // the first attempt created.
-  return WithRetries("", [&](grpc::ClientContext* c) { return stub_->Backup(c, request, response); }, false);
+  return WithRetries("", [&](grpc::ClientContext* c, Stub* s) { return s->Backup(c, request, response); }, false);
 }
 
 }  // namespace lmd::client

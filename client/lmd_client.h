@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "client/cluster_routes.h"
 #include "core/status.h"
 #include "lmd/v1/lmd.grpc.pb.h"
 
@@ -59,6 +60,12 @@ struct ClientOptions {
   // is drawn between half and 1.5 times its backoff.
   int max_attempts = 4;
   std::chrono::milliseconds initial_backoff = std::chrono::milliseconds(100);
+  // In a cluster of lmdd nodes: send each collection's calls straight to the
+  // node that serves them (writes to its primary, reads to an in-sync copy;
+  // client/cluster_routes.h) instead of through `target`, which forwards.
+  // Needs a token that may read the cluster (server-wide read); without
+  // one, or against a node that runs alone, every call goes to `target`.
+  bool route = false;
 };
 
 class LmdClient {
@@ -93,14 +100,17 @@ class LmdClient {
   // A context with the deadline, token and collection header.
   std::unique_ptr<grpc::ClientContext> NewContext(const std::string& collection,
                                                   std::chrono::system_clock::time_point deadline) const;
-  // Runs `call` with a fresh context per attempt, retrying (when `retry`)
-  // as the header says; *attempts (optional) receives how many it made.
-  grpc::Status WithRetries(const std::string& collection,
-                           const std::function<grpc::Status(grpc::ClientContext*)>& call, bool retry = true,
-                           int* attempts = nullptr) const;
+  using Call = std::function<grpc::Status(grpc::ClientContext*, v1::LmdService::Stub*)>;
+  // Runs `call` with a fresh context per attempt, on the node that serves
+  // the collection's reads or (`write`) writes when routing, retrying (when
+  // `retry`) as the header says; *attempts (optional) receives how many it
+  // made.
+  grpc::Status WithRetries(const std::string& collection, const Call& call, bool retry = true,
+                           int* attempts = nullptr, bool write = false) const;
 
   ClientOptions options_;
-  std::unique_ptr<v1::LmdService::Stub> stub_;
+  std::unique_ptr<v1::LmdService::Stub> stub_;  // to options_.target
+  std::unique_ptr<ClusterRoutes> routes_;       // with options_.route
 };
 
 }  // namespace lmd::client

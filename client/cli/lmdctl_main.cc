@@ -10,7 +10,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: lmdctl [--server HOST:PORT] [--json] [--timeout SECONDS] [--token TOKEN]\n"
-    "              [--tls-ca PEM [--tls-cert PEM --tls-key PEM] [--tls-server-name NAME]] <command> [options]\n"
+    "              [--tls-ca PEM [--tls-cert PEM --tls-key PEM] [--tls-server-name NAME]] [--route] <command> [options]\n"
     "commands:\n"
     "  insert --collection C --file POINTS [--id ID] [--robot R]   store a map from a points file\n"
     "  get --collection C --id ID [--out POINTS]                   show (and save) a stored map\n"
@@ -42,6 +42,7 @@ constexpr char kUsage[] =
     "matches); --sequence K (with --log / --bag) adds the K maps before --map, --sequence-step maps apart (5), with\n"
     "their relative poses from the route, so that a look-alike place must fit the whole sequence;\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
+    "--route (in a cluster) sends calls straight to the collection's primary or an in-sync copy, not via --server.\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
 
 using Command = int (*)(const CommandContext&);
@@ -89,7 +90,7 @@ std::string Required(const Args& args, const std::string& key) {
 }
 
 int Main(int argc, char** argv) {
-  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor", "fall-back"});
+  Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor", "fall-back", "route"});
   if (!args.ok()) return Fail(args.status().message(), 2);
   if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {
     std::fputs(kUsage, args->positional.empty() && !args->Switch("help") && !args->Switch("h") ? stderr : stdout);
@@ -115,6 +116,7 @@ int Main(int argc, char** argv) {
   options.tls_cert_file = args->Get("tls-cert");
   options.tls_key_file = args->Get("tls-key");
   options.tls_server_name = args->Get("tls-server-name");
+  options.route = args->Switch("route");
   Result<std::unique_ptr<client::LmdClient>> client = client::LmdClient::Create(options);
   if (!client.ok()) return Fail(client.status().message());
   return command->second(CommandContext{**client, *args, args->Switch("json")});

@@ -187,6 +187,28 @@ TEST_F(ClusterTest, ACollectionKeepsTheCopiesItIsSetTo) {
   EXPECT_EQ(alone.client().SetReplication(request, &set).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
+TEST_F(ClusterTest, ARoutingClientReachesTheCopiesWithoutItsEntryNode) {
+  ASSERT_TRUE(Insert("m1", 1));  // node 1 is the primary
+  client::ClientOptions options;
+  options.target = Address(0);
+  options.route = true;
+  auto routed = client::LmdClient::Create(options).value();
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(routed->InsertMaps(OneMapRequest("site", "m2", SquareRoomMap(14)), &inserted).ok());
+  nodes_[0]->Shutdown(std::chrono::milliseconds(0));  // the node the client was given is gone
+  nodes_[0].reset();
+  const grpc::Status written = routed->InsertMaps(OneMapRequest("site", "m3", SquareRoomMap(16)), &inserted);
+  EXPECT_TRUE(written.ok()) << written.error_message();
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("m3");
+  v1::GetMapResponse got;
+  for (int k = 0; k < 4; ++k) {  // reads go to either live copy (or, once, to the dead one: then asked again)
+    const grpc::Status read = routed->GetMap(get, &got);
+    EXPECT_TRUE(read.ok()) << read.error_message();
+  }
+}
+
 TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
   ASSERT_TRUE(Insert("m1", 2));
   // Every node answers reads and writes for the collection, whichever is its primary.
