@@ -11,16 +11,22 @@
 #      primary, a new epoch) and nothing acknowledged is lost;
 #   4. kill one etcd member (a follower) during writes: writes go on;
 #   5. a fourth node that holds no copy answers reads and queries (forwarded);
-#   6. insert throughput, one node alone and a collection with three copies.
+#   6. TLS and tokens between nodes;
+#   7. insert throughput, one node alone and a collection with three copies;
+#   8. query throughput, the queries sent to one copy and spread over three.
+# Each node runs one worker thread (worker_threads=1), as if it had a core of
+# its own: three nodes share this machine's cores, so throughput ratios are
+# bounded by them (two cores: reads over three copies gain at most 2x).
 # Ends with one line: PASS, or FAIL: <why> (exit 1).
 # Run: bash deploy/test-replication.sh   (~4 min once built; installs etcd and
 # the build packages through scripts/setup.sh). Env: LMD_BUILD_DIR,
-# LMD_REPL_BASE_PORT (default 52300: it and the next 30 ports are used).
+# LMD_REPL_BASE_PORT (default 29300, below Linux's ephemeral ports, so that no
+# outgoing connection holds one: it and the next 30 ports are used).
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${LMD_BUILD_DIR:-$root/build}
-base=${LMD_REPL_BASE_PORT:-52300}
+base=${LMD_REPL_BASE_PORT:-29300}
 work=$(mktemp -d)
 log() { printf '[test-replication] %s\n' "$*"; }
 fail() { printf '[test-replication] FAIL: %s\n' "$*"; exit 1; }
@@ -69,7 +75,7 @@ log "etcd $(etcd --version | head -1 | awk '{print $3}'): 3 members on $endpoint
 node_addr() { echo "127.0.0.1:$((base + 20 + $1))"; }      # nodes 1..7
 start_node() {
   local n=$1
-  "$lmdd_bin" --listen "$(node_addr "$n")" --data-dir "$work/n$n" --log-level warn \
+  "$lmdd_bin" --listen "$(node_addr "$n")" --data-dir "$work/n$n" --log-level warn --set worker_threads=1 \
     --set cluster_etcd="$endpoints" --set cluster_node_id="n$n" >>"$work/n$n.log" 2>&1 &
   pids[n$n]=$!
   for _ in $(seq 100); do
@@ -200,7 +206,8 @@ log "etcd member e$follower_member (a follower) killed during writes: longest ga
 
 # --- 5. a node without a copy answers ------------------------------------------------
 start_node 4
-"$lmdctl_bin" --server "$(node_addr 4)" get --collection kill1 --id w00000005 --out "$work/q.points" >/dev/null \
+first_map=$(head -n 1 "$work/kill1.acked" | cut -d' ' -f1)
+"$lmdctl_bin" --server "$(node_addr 4)" get --collection kill1 --id "$first_map" --out "$work/q.points" >/dev/null \
   || fail "node n4 (no copy of kill1) did not answer a get"
 "$lmdctl_bin" --server "$(node_addr 4)" list --collection kill1 >/dev/null || fail "node n4 did not answer a list"
 answer=$("$lmdctl_bin" --server "$(node_addr 4)" query --collection kill1 --file "$work/q.points" --top-k 1) \
@@ -236,11 +243,23 @@ print(sum(1 for c in p['copies'] if c.get('in_sync') and int(c.get('seq','0'))==
 log "two nodes with TLS and tokens: a write to s6 on both copies over TLS, read through s7; no token, no answer"
 
 # --- 7. insert throughput ------------------------------------------------------------
-"$lmdd_bin" --listen "$(node_addr 5)" --data-dir "$work/alone" --log-level warn >"$work/alone.log" 2>&1 &
+"$lmdd_bin" --listen "$(node_addr 5)" --data-dir "$work/alone" --log-level warn --set worker_threads=1 \
+  >"$work/alone.log" 2>&1 &
 pids[alone]=$!
 sleep 1
 alone=$("$bench_bin" fill --server "$(node_addr 5)" --collection fill --maps 1500 --batch 1 2>/dev/null | sed -n 's/.*(\([0-9]*\) maps\/s.*/\1/p')
 replicated=$("$bench_bin" fill --server "$(node_addr 1)" --collection fill3 --maps 1500 --batch 1 2>/dev/null | sed -n 's/.*(\([0-9]*\) maps\/s.*/\1/p')
 log "inserts, one map per call: one node alone $alone/s, three copies $replicated/s ($(awk -v a="$alone" -v r="$replicated" 'BEGIN { printf "%.0f", 100 * r / a }') %)"
+
+# --- 8. query throughput ---------------------------------------------------------------
+wait_in_sync fill3
+rate() { sed -n 's/.*(\([0-9.]*\) queries\/s).*/\1/p'; }
+one=$("$bench_bin" reads --servers "$(node_addr 1)" --collection fill3 --threads 6 --seconds 10) \
+  || fail "queries to one copy: $one"
+three=$("$bench_bin" reads --servers "$servers" --collection fill3 --threads 6 --seconds 10) \
+  || fail "queries over three copies: $three"
+log "queries, one copy: $one"
+log "queries, three copies: $three"
+log "query throughput over three copies: $(awk -v a="$(echo "$one" | rate)" -v b="$(echo "$three" | rate)" 'BEGIN { printf "%.2f", b / a }') x one copy's"
 
 echo "[test-replication] PASS: 10 primary kills (worst failover $worst s), follower restart, fenced pause, etcd member loss, forwarding; no acknowledged map lost"
