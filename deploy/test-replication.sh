@@ -10,7 +10,9 @@
 #   3. SIGSTOP the primary beyond its lease, then SIGCONT: it is fenced (a new
 #      primary, a new epoch) and nothing acknowledged is lost;
 #   4. kill one etcd member (a follower) during writes: writes go on;
-#   5. a fourth node that holds no copy answers reads and queries (forwarded);
+#   5. a fourth node that holds no copy answers reads and queries (forwarded),
+#      then takes the copies it ranks highest for (rebalancing): each collection
+#      settles on 3 in-sync copies, every acknowledged map on all of them;
 #   6. TLS and tokens between nodes;
 #   7. insert throughput, one node alone and a collection with three copies;
 #   8. query throughput, the queries sent to one copy and spread over three.
@@ -212,7 +214,25 @@ first_map=$(head -n 1 "$work/kill1.acked" | cut -d' ' -f1)
 "$lmdctl_bin" --server "$(node_addr 4)" list --collection kill1 >/dev/null || fail "node n4 did not answer a list"
 answer=$("$lmdctl_bin" --server "$(node_addr 4)" query --collection kill1 --file "$work/q.points" --top-k 1) \
   || fail "node n4 did not answer a query"
-log "node n4, which holds no copy of kill1, answered a get, a list and a query (forwarded): $(echo "$answer" | head -1)"
+log "node n4, just joined (no copy in sync yet), answered a get, a list and a query (forwarded): $(echo "$answer" | head -1)"
+# Rebalancing: n4 copies the collections it ranks highest for; each copy it
+# replaces leaves once n4 is in sync.
+settled=""
+for _ in $(seq 600); do
+  settled=$(cluster_json "$(node_addr 1)" 2>/dev/null | $py -c "
+import json,sys
+d=json.load(sys.stdin)
+ps=[p for p in d.get('placements',[]) if p['collection'].startswith('kill')]
+ok=len(ps)==10 and all(len(p['copies'])==int(p.get('copies_wanted',0)) and all(c.get('in_sync') and c.get('reachable') and int(c.get('lag','0'))==0 for c in p['copies']) for p in ps)
+print(sum(1 for p in ps for c in p['copies'] if c['node_id']=='n4') if ok else '')") && [ -n "$settled" ] && break
+  sleep 0.2
+done
+[ -n "$settled" ] || fail "the placements did not settle after n4 joined: $("$lmdctl_bin" --server "$(node_addr 1)" cluster)"
+for k in $(seq 10); do
+  "$bench_bin" writes --verify --servers "$servers,$(node_addr 4)" --collection "kill$k" --acked "$work/kill$k.acked" \
+    --copies 3 >"$work/kill$k.verify4" || fail "kill$k after rebalancing: $(cat "$work/kill$k.verify4")"
+done
+log "n4 took $settled of the 10 kill collections' copies (rebalancing); each settled on 3 in-sync copies holding every acknowledged map"
 
 # --- 6. TLS and tokens between nodes ---------------------------------------------------
 bash "$root/deploy/make-dev-secrets.sh" "$work/secrets" >/dev/null

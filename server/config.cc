@@ -103,6 +103,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "cluster_tls_ca_file") { config->cluster_tls_ca_file = value; return Status::Ok(); }
   if (key == "cluster_tls_server_name") { config->cluster_tls_server_name = value; return Status::Ok(); }
   if (key == "cluster_replication_factor") return SetUnsigned(key, value, &config->cluster_replication_factor, 1);
+  if (key == "cluster_replace_after_s") return SetUnsigned(key, value, &config->cluster_replace_after_s);
   if (key == "cluster_lease_ttl_s") return SetUnsigned(key, value, &config->cluster_lease_ttl_s, 1);
   if (key == "cluster_replicate_timeout_ms") return SetUnsigned(key, value, &config->cluster_replicate_timeout_ms, 1);
   if (key == "cluster_log_mb") return SetUnsigned(key, value, &config->cluster_log_mb);

@@ -127,6 +127,10 @@ struct ServerConfig {
   std::string cluster_zone;
   // Copies of each collection (the primary included), when nodes allow.
   uint32_t cluster_replication_factor = 3;
+  // How long a node may be gone, s, before its collections are copied to
+  // other nodes: a restart or a short network cut costs no copy (its own
+  // catches up when it returns). Its primaries fail over at once all the same.
+  uint32_t cluster_replace_after_s = 60;
   // The node's etcd lease, s: a node silent this long loses its primaries to
   // in-sync copies. etcd grants at least 2 s with its default flags.
   uint32_t cluster_lease_ttl_s = 2;

@@ -200,6 +200,7 @@ Status ClusterNode::Register() {
 void ClusterNode::OnWatch(const WatchBatch& batch) {
   {
     std::lock_guard<std::mutex> lock(mu_);
+    const LiveNodes before = live_;
     if (batch.reset) {
       live_.clear();
       placements_.clear();
@@ -225,6 +226,11 @@ void ClusterNode::OnWatch(const WatchBatch& batch) {
         controller_ = false;
       }
     }
+    const auto now = Clock::now();
+    for (const auto& [id, record] : before) {
+      if (live_.count(id) == 0) lost_.emplace(id, std::make_pair(record, now));
+    }
+    for (const auto& [id, record] : live_) lost_.erase(id);
     wake_ = true;
   }
   wake_cv_.notify_all();
@@ -293,10 +299,20 @@ void ClusterNode::RunController() {
   std::vector<std::pair<std::string, Placed>> repairs;
   {
     std::lock_guard<std::mutex> lock(mu_);
-    if (Clock::now() - started_ < std::chrono::seconds(config_.cluster_lease_ttl_s)) return;
+    const auto now = Clock::now();
+    if (now - started_ < std::chrono::seconds(config_.cluster_lease_ttl_s)) return;
+    LiveNodes returning;  // gone so recently that their copies are not yet made elsewhere
+    for (auto it = lost_.begin(); it != lost_.end();) {
+      if (now - it->second.second >= std::chrono::seconds(config_.cluster_replace_after_s)) {
+        it = lost_.erase(it);
+      } else {
+        returning.emplace(it->first, it->second.first);
+        ++it;
+      }
+    }
     for (const auto& [name, placed] : placements_) {
       std::optional<internal::Placement> next =
-          Repaired(name, placed.placement, live_, config_.cluster_replication_factor);
+          Repaired(name, placed.placement, live_, config_.cluster_replication_factor, returning);
       if (next) repairs.push_back({name, Placed{*next, placed.revision}});
     }
   }

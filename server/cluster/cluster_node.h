@@ -179,6 +179,9 @@ class ClusterNode {
   mutable std::mutex mu_;
   // State below is guarded by mu_.
   LiveNodes live_;
+  // Nodes gone from live_, with when: the controller copies their
+  // collections elsewhere only after cluster_replace_after_s.
+  std::map<std::string, std::pair<internal::NodeRecord, std::chrono::steady_clock::time_point>> lost_;
   std::map<std::string, Placed> placements_;
   bool fenced_ = true;              // no lease: serves no writes as a primary
   bool controller_ = false;

@@ -36,48 +36,23 @@ std::vector<std::string> Spares(const std::string& collection, const LiveNodes& 
   return spares;
 }
 
-// Adds spares as replicas (not in sync) one at a time, each choice seeing
-// the zones the earlier ones took.
-void AddSpares(const std::string& collection, const LiveNodes& live, size_t wanted, bool in_sync,
-               internal::Placement* placement) {
-  std::set<std::string> taken(placement->replicas().begin(), placement->replicas().end());
-  std::set<std::string> zones;
-  size_t live_replicas = 0;
-  for (const std::string& id : placement->replicas()) {
-    const auto it = live.find(id);
-    if (it == live.end()) continue;
-    ++live_replicas;
-    if (!it->second.zone().empty()) zones.insert(it->second.zone());
-  }
-  while (live_replicas < wanted) {
-    const std::vector<std::string> spares = Spares(collection, live, taken, zones);
-    if (spares.empty()) return;
-    const std::string& id = spares.front();
-    placement->add_replicas(id);
-    if (in_sync) placement->add_in_sync(id);
-    taken.insert(id);
-    if (!live.at(id).zone().empty()) zones.insert(live.at(id).zone());
-    ++live_replicas;
-  }
-}
-
-// Removes replicas beyond `wanted` (Repaired says which), only while at
-// least `wanted` copies stay in sync.
-void Trim(const std::string& collection, const LiveNodes& live, size_t wanted, internal::Placement* placement) {
-  if (static_cast<size_t>(placement->in_sync_size()) < wanted) return;
+// Removes replicas the target does not hold, those not in sync (dead ones
+// first) before those in sync, the lowest-ranked first, only while at least
+// `wanted` copies stay in sync: a node leaves a placement only once the
+// copies that replace it have caught up.
+void Trim(const std::string& collection, const LiveNodes& live, const std::vector<std::string>& target,
+          size_t wanted, internal::Placement* placement) {
   std::vector<std::string> leaving;  // the first to leave first
   for (const std::string& id : placement->replicas()) {
-    if (id != placement->primary()) leaving.push_back(id);
+    if (std::find(target.begin(), target.end(), id) == target.end()) leaving.push_back(id);
   }
   auto order = [&](const std::string& id) {
-    const bool in_sync = Contains(placement->in_sync(), id);
-    return std::make_tuple(in_sync, live.count(id) != 0, Rank(collection, id));
+    return std::make_tuple(Contains(placement->in_sync(), id), live.count(id) != 0, Rank(collection, id));
   };
   std::sort(leaving.begin(), leaving.end(), [&](const std::string& a, const std::string& b) { return order(a) < order(b); });
   for (const std::string& id : leaving) {
-    if (static_cast<size_t>(placement->replicas_size()) <= wanted) return;
-    const bool in_sync = Contains(placement->in_sync(), id);
-    if (in_sync && static_cast<size_t>(placement->in_sync_size()) <= wanted) return;
+    const size_t in_sync = static_cast<size_t>(placement->in_sync_size());
+    if (in_sync < wanted || (Contains(placement->in_sync(), id) && in_sync <= wanted)) return;
     for (auto* list : {placement->mutable_replicas(), placement->mutable_in_sync()}) {
       list->erase(std::remove(list->begin(), list->end(), id), list->end());
     }
@@ -91,21 +66,42 @@ size_t WantedCopies(const internal::Placement& placement, size_t default_replica
                                                                   : default_replication_factor);
 }
 
+std::vector<std::string> TargetCopies(const std::string& collection, const std::string& primary,
+                                      const LiveNodes& placeable, size_t wanted) {
+  std::vector<std::string> target{primary};
+  std::set<std::string> taken{primary};
+  std::set<std::string> zones;
+  if (const auto it = placeable.find(primary); it != placeable.end() && !it->second.zone().empty()) {
+    zones.insert(it->second.zone());
+  }
+  while (target.size() < wanted) {  // one at a time: each choice sees the zones the earlier ones took
+    const std::vector<std::string> spares = Spares(collection, placeable, taken, zones);
+    if (spares.empty()) break;
+    const std::string& id = spares.front();
+    target.push_back(id);
+    taken.insert(id);
+    if (!placeable.at(id).zone().empty()) zones.insert(placeable.at(id).zone());
+  }
+  return target;
+}
+
 internal::Placement NewPlacement(const std::string& collection, const LiveNodes& live, const std::string& creator,
                                  size_t replication_factor, bool others_in_sync) {
   internal::Placement placement;
   placement.set_epoch(1);
   placement.set_primary(creator);
-  placement.add_in_sync(creator);
-  placement.add_replicas(creator);
   LiveNodes with_creator = live;
   with_creator.emplace(creator, internal::NodeRecord());
-  AddSpares(collection, with_creator, std::max<size_t>(1, replication_factor), others_in_sync, &placement);
+  for (const std::string& id : TargetCopies(collection, creator, with_creator, std::max<size_t>(1, replication_factor))) {
+    placement.add_replicas(id);
+    if (id == creator || others_in_sync) placement.add_in_sync(id);
+  }
   return placement;
 }
 
 std::optional<internal::Placement> Repaired(const std::string& collection, const internal::Placement& current,
-                                            const LiveNodes& live, size_t default_replication_factor) {
+                                            const LiveNodes& live, size_t default_replication_factor,
+                                            const LiveNodes& returning) {
   const size_t wanted = WantedCopies(current, default_replication_factor);
   internal::Placement next = current;
   auto alive = [&](const std::string& id) { return live.count(id) != 0; };
@@ -124,8 +120,16 @@ std::optional<internal::Placement> Repaired(const std::string& collection, const
     if (id != next.primary() && alive(id)) next.add_in_sync(id);
   }
   if (!alive(next.primary())) return std::nullopt;  // no live copy to promote: wait for one
-  AddSpares(collection, live, wanted, /*in_sync=*/false, &next);
-  Trim(collection, live, wanted, &next);
+  // Where the copies belong: live nodes, and replicas gone only briefly.
+  LiveNodes placeable = live;
+  for (const auto& [id, record] : returning) {
+    if (Contains(current.replicas(), id)) placeable.emplace(id, record);
+  }
+  const std::vector<std::string> target = TargetCopies(collection, next.primary(), placeable, wanted);
+  for (const std::string& id : target) {
+    if (!Contains(next.replicas(), id)) next.add_replicas(id);  // catches up before it counts
+  }
+  Trim(collection, live, target, wanted, &next);
   if (next.SerializeAsString() == current.SerializeAsString()) return std::nullopt;
   return next;
 }

@@ -3,6 +3,8 @@
 #include "server/cluster/placement.h"
 #include "server/cluster/replication_log.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 namespace lmd::server::cluster {
@@ -117,8 +119,45 @@ TEST(PlacementTest, ADeadCopyLeavesOnlyOnceItsReplacementCaughtUp) {
   ASSERT_TRUE(next);
   EXPECT_EQ(List(next->replicas()), (std::vector<std::string>{"n1", "n2", "n4"}));
   EXPECT_EQ(next->in_sync_size(), 3);
-  // n3 back: the collection has its copies, n3 is not asked for one again.
-  EXPECT_FALSE(Repaired("site", *next, Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}, {"n4", ""}}), 3));
+}
+
+TEST(PlacementTest, ACopyGoneBrieflyIsNotMadeElsewhere) {
+  const internal::Placement p = NewPlacement("site", Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}}), "n1", 3);
+  const std::optional<internal::Placement> next =
+      Repaired("site", p, Nodes({{"n1", ""}, {"n2", ""}, {"n4", ""}}), 3, /*returning=*/Nodes({{"n3", ""}}));
+  ASSERT_TRUE(next);
+  std::vector<std::string> replicas = List(next->replicas());
+  std::sort(replicas.begin(), replicas.end());
+  EXPECT_EQ(replicas, (std::vector<std::string>{"n1", "n2", "n3"}));  // n4 copies nothing
+  EXPECT_EQ(List(next->in_sync()), (std::vector<std::string>{"n1", "n2"}));
+}
+
+TEST(PlacementTest, ANodeJoiningTakesTheCopiesItRanksHighestFor) {
+  const LiveNodes three = Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}});
+  const LiveNodes four = Nodes({{"n1", ""}, {"n2", ""}, {"n3", ""}, {"n4", ""}});
+  int moved = 0;
+  for (int c = 0; c < 100; ++c) {
+    const std::string name = "site" + std::to_string(c);
+    internal::Placement p = NewPlacement(name, three, "n1", 2);
+    const std::vector<std::string> target = TargetCopies(name, "n1", four, 2);
+    std::optional<internal::Placement> next = Repaired(name, p, four, 2);
+    if (std::find(target.begin(), target.end(), "n4") == target.end()) {
+      EXPECT_FALSE(next) << name << ": n4 ranks below its copies: nothing moves";
+      continue;
+    }
+    ++moved;
+    ASSERT_TRUE(next) << name;
+    EXPECT_EQ(next->replicas_size(), 3) << name << ": n4 copies first, the copy it replaces stays meanwhile";
+    p = *next;
+    p.add_in_sync("n4");
+    next = Repaired(name, p, four, 2);
+    ASSERT_TRUE(next) << name;
+    EXPECT_EQ(List(next->replicas()), target) << name;
+    EXPECT_EQ(next->in_sync_size(), 2) << name;
+  }
+  // The primary stays; of its one other copy, n4 should take about a third.
+  EXPECT_GT(moved, 15);
+  EXPECT_LT(moved, 55);
 }
 
 internal::ApplyRequest Write(uint64_t epoch, uint64_t seq) {
