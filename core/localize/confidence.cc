@@ -51,9 +51,9 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
     }
   }
   const double margin = v.best_score - v.rival_score;
-  v.sure = v.best_score >= options.min_score && margin >= options.min_margin;
   v.confidence = 1.0 / (1.0 + std::exp(-(options.bias + options.score_weight * v.best_score +
                                          options.margin_weight * margin)));
+  v.sure = v.best_score >= options.min_score && margin >= options.min_margin && v.confidence >= options.min_confidence;
   return v;
 }
 

@@ -188,16 +188,24 @@ TEST(JudgeTest, ADisagreeingHitWithinTheMarginIsARival) {
   EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}, 0.9, 0.1), 1e-12);
 }
 
+// The score and margin thresholds alone (ConfidenceOptions::min_confidence
+// 0); the calibrated confidence's own threshold has a test below.
+ConfidenceOptions ThresholdsOnly() {
+  ConfidenceOptions options;
+  options.min_confidence = 0.0;
+  return options;
+}
+
 TEST(JudgeTest, ADisagreeingHitBeyondTheMarginLeavesItSure) {
   const Maps& m = TheMaps();
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.65, kQueryPose, &m.partitioned, false, std::nullopt}};
-  const Verdict v = Judge(&hits);
+  const Verdict v = Judge(&hits, ThresholdsOnly());
   EXPECT_TRUE(v.sure);  // margin 0.25 >= 0.2
   EXPECT_DOUBLE_EQ(v.rival_score, 0.65);
   EXPECT_FALSE(hits[1].agrees_with_best);
   // The best rival counts: one more within the margin overturns it.
   hits.push_back({0.85, kQueryPose, &m.partitioned, false, std::nullopt});
-  const Verdict w = Judge(&hits);
+  const Verdict w = Judge(&hits, ThresholdsOnly());
   EXPECT_FALSE(w.sure);
   EXPECT_DOUBLE_EQ(w.rival_score, 0.85);
 }
@@ -226,10 +234,10 @@ TEST(JudgeTest, AnAgreeingHitCountsAndIsNoRival) {
 
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
-  const Verdict close = Judge(&hits, {}, 0.75);
+  const Verdict close = Judge(&hits, ThresholdsOnly(), 0.75);
   EXPECT_FALSE(close.sure);
   EXPECT_DOUBLE_EQ(close.rival_score, 0.75);
-  const Verdict far = Judge(&hits, {}, 0.65);
+  const Verdict far = Judge(&hits, ThresholdsOnly(), 0.65);
   EXPECT_TRUE(far.sure);
   EXPECT_DOUBLE_EQ(far.rival_score, 0.65);
   // The larger of the self rival and the disagreeing hits is the rival.
@@ -261,18 +269,32 @@ TEST(JudgeTest, ConfidenceGrowsWithTheMarginAndTheScore) {
 // can sit on the threshold.
 TEST(JudgeTest, TheMarginAndScoreThresholdsAreTheOptions) {
   std::vector<JudgedHit> hits = {{0.75, kQueryPose, &TheMaps().room, false, std::nullopt}};
-  ConfidenceOptions options;
+  ConfidenceOptions options = ThresholdsOnly();
   options.min_margin = 0.25;
   EXPECT_TRUE(Judge(&hits, options, 0.5).sure);  // margin >= min_margin
   options.min_margin = 0.375;
   EXPECT_FALSE(Judge(&hits, options, 0.5).sure);
   options.min_margin = 0.05;
-  EXPECT_FALSE(Judge(&hits, {}, 0.625).sure);  // default 0.2
+  EXPECT_FALSE(Judge(&hits, ThresholdsOnly(), 0.625).sure);  // default 0.2
   EXPECT_TRUE(Judge(&hits, options, 0.625).sure);
   options.min_score = 0.75;
   EXPECT_TRUE(Judge(&hits, options, 0.5).sure);  // min_score itself is enough
   options.min_score = 0.875;
   EXPECT_FALSE(Judge(&hits, options, 0.5).sure);
+}
+
+// Score and margin over their thresholds are not enough where the
+// calibrated confidence says such answers are often wrong.
+TEST(JudgeTest, SureNeedsTheCalibratedConfidenceToo) {
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
+  const Verdict modest = Judge(&hits, {}, 0.65);  // margin 0.25: confidence 0.89
+  EXPECT_LT(modest.confidence, 0.9);
+  EXPECT_FALSE(modest.sure);
+  ConfidenceOptions lenient;
+  lenient.min_confidence = 0.85;
+  EXPECT_TRUE(Judge(&hits, lenient, 0.65).sure);
+  hits[0].score = 0.95;  // confidence 0.97
+  EXPECT_TRUE(Judge(&hits, {}, 0.65).sure);
 }
 
 // Hits far below the best (best - agreement_window) are not compared: no
