@@ -1,6 +1,7 @@
 #include "client/cluster_routes.h"
 
 #include <algorithm>
+#include <optional>
 
 #include <grpcpp/create_channel.h>
 
@@ -26,44 +27,51 @@ v1::LmdService::Stub* ClusterRoutes::StubAt(const std::string& address) {
   return stub.get();
 }
 
-void ClusterRoutes::Refresh() {
+void ClusterRoutes::Refresh(std::unique_lock<std::mutex>* lock) {
   const auto now = Clock::now();
-  if (!stale_ && now - fetched_ < kViewLifetime) return;
-  if (now - fetched_ < kMinRefreshInterval) return;
+  if (refreshing_ || (!stale_ && now - fetched_ < kViewLifetime) || now - fetched_ < kMinRefreshInterval) return;
+  refreshing_ = true;
   fetched_ = now;
-  std::vector<std::string> askable{entry_};
-  askable.insert(askable.end(), nodes_.begin(), nodes_.end());
-  for (const std::string& address : askable) {
+  std::vector<v1::LmdService::Stub*> askable{StubAt(entry_)};
+  for (const std::string& address : nodes_) askable.push_back(StubAt(address));
+  lock->unlock();  // calls meanwhile use the view as it is
+  std::optional<v1::ClusterResponse> answer;
+  for (v1::LmdService::Stub* stub : askable) {
     grpc::ClientContext context;
     prepare_(&context);
     v1::ClusterResponse cluster;
-    if (!StubAt(address)->Cluster(&context, v1::ClusterRequest(), &cluster).ok()) continue;
-    std::map<std::string, std::string> address_of;  // node id -> address
-    nodes_.clear();
-    for (const v1::ClusterNodeInfo& node : cluster.nodes()) {
-      address_of[node.node_id()] = node.address();
-      nodes_.push_back(node.address());
+    if (stub->Cluster(&context, v1::ClusterRequest(), &cluster).ok()) {
+      answer = std::move(cluster);
+      break;
     }
-    copies_.clear();
-    for (const v1::ClusterPlacement& placement : cluster.placements()) {
-      Copies copies;
-      for (const v1::ClusterCopy& copy : placement.copies()) {
-        const auto it = address_of.find(copy.node_id());
-        if (it == address_of.end()) continue;  // down
-        if (copy.primary()) copies.primary = it->second;
-        if (copy.in_sync()) copies.in_sync.push_back(it->second);
-      }
-      copies_[placement.collection()] = std::move(copies);
-    }
-    stale_ = false;
-    return;
   }
+  lock->lock();
+  refreshing_ = false;
+  if (!answer) return;
+  std::map<std::string, std::string> address_of;  // node id -> address
+  nodes_.clear();
+  for (const v1::ClusterNodeInfo& node : answer->nodes()) {
+    address_of[node.node_id()] = node.address();
+    nodes_.push_back(node.address());
+  }
+  copies_.clear();
+  for (const v1::ClusterPlacement& placement : answer->placements()) {
+    Copies copies;
+    for (const v1::ClusterCopy& copy : placement.copies()) {
+      const auto it = address_of.find(copy.node_id());
+      if (it == address_of.end()) continue;  // down
+      if (copy.primary()) copies.primary = it->second;
+      if (copy.in_sync()) copies.in_sync.push_back(it->second);
+    }
+    copies_[placement.collection()] = std::move(copies);
+  }
+  stale_ = false;
 }
 
 v1::LmdService::Stub* ClusterRoutes::For(const std::string& collection, bool write) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::unique_lock<std::mutex> lock(mu_);
   if (collection.empty()) return StubAt(entry_);
-  Refresh();
+  Refresh(&lock);
   const auto it = copies_.find(collection);
   if (it == copies_.end()) return StubAt(entry_);
   const Copies& copies = it->second;

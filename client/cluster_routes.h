@@ -44,8 +44,9 @@ class ClusterRoutes {
     std::string primary;               // address
     std::vector<std::string> in_sync;  // addresses
   };
-  // Asks the cluster for its placements when the view is stale. Holds mu_.
-  void Refresh();
+  // Asks the cluster for its placements when the view is stale (one thread
+  // at a time; `lock`, on mu_, is released during the calls).
+  void Refresh(std::unique_lock<std::mutex>* lock);
   v1::LmdService::Stub* StubAt(const std::string& address);  // holds mu_
 
   const std::string entry_;
@@ -59,6 +60,7 @@ class ClusterRoutes {
   std::vector<std::string> nodes_;                                      // addresses the cluster named
   std::chrono::steady_clock::time_point fetched_{};                     // when the view was last asked for
   bool stale_ = true;
+  bool refreshing_ = false;
   std::mt19937 random_{std::random_device{}()};
 };
 
