@@ -39,14 +39,19 @@ Status ValidateKey(const std::string& collection, const std::string& map_id) {
   return s.ok() ? ValidateMapId(map_id, /*allow_empty=*/false) : s;
 }
 
-// The collection a batch writes to, for logs ("" if none or several).
-// What a kept request id is checked against: the maps as sent.
-uint64_t RequestFingerprint(const std::vector<const v1::InsertMapRequest*>& requests) {
+// What a kept request id is checked against: the maps as sent, each by its
+// metadata and its content key's FNV half (the map's bytes, hashed once to
+// describe it; the same on every node).
+uint64_t RequestFingerprint(const std::vector<const v1::InsertMapRequest*>& requests,
+                            const std::vector<DescriptorCache::Key>& keys) {
   uint64_t hash = kFnv1aOffset;
-  for (const v1::InsertMapRequest* request : requests) hash = Fnv1a64(request->SerializeAsString(), hash);
+  for (size_t i = 0; i < requests.size(); ++i) {
+    hash = Fnv1aMix(Fnv1a64(requests[i]->metadata().SerializeAsString(), hash), keys[i].b);
+  }
   return hash;
 }
 
+// The collection a batch writes to, for logs ("" if none or several).
 std::string BatchCollection(const v1::InsertMapsRequest& request) {
   if (request.maps_size() == 0) return "";
   const std::string& first = request.maps(0).metadata().collection();
@@ -100,14 +105,13 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
   }
   Status valid_id = ValidateRequestId(request_id);
   if (!valid_id.ok()) return valid_id;
-  std::optional<InsertRequestId> request;
-  if (!request_id.empty()) request = InsertRequestId{request_id, RequestFingerprint(requests)};
   std::vector<std::shared_ptr<const DescribedMap>> described;
+  std::vector<DescriptorCache::Key> keys;
   for (const v1::InsertMapRequest* request : requests) {  // described outside the store's lock
     MapWrite write;
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
-    DescriptorCache::Key key;
+    DescriptorCache::Key& key = keys.emplace_back();
     described.push_back(Describe(request->map(), /*with_lmd=*/true, &key));
     // The anchor (output only): the robot's pose hint, or where lmdd has
     // just localised this very map against the collection's anchored maps.
@@ -128,6 +132,8 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
   limits.request_ids_kept = config_.insert_request_ids_kept;
   std::vector<v1::MapMetadata> evicted;
   bool replayed = false;
+  std::optional<InsertRequestId> request;
+  if (!request_id.empty()) request = InsertRequestId{request_id, RequestFingerprint(requests, keys)};
   const InsertRequestId* kept = request ? &*request : nullptr;
   Status stored;
   if (cluster_ != nullptr) {  // the stream's maps too: each of its batches holds one map

@@ -369,9 +369,13 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     if (!kept.ok()) return kept.status();
     if (*kept) {  // a retry: answered as the first time, nothing written
       if ((*kept)->fingerprint() != request->fingerprint || (*kept)->maps_size() != static_cast<int>(maps->size())) {
-        return Status::FailedPrecondition("request_id '" + request->id + "' was used by an earlier insert of other maps into collection '" + collection + "'");
+        return Status::FailedPrecondition("request_id '" + request->id +
+                                          "' was used by an earlier insert of other maps into collection '" +
+                                          collection + "'");
       }
-      for (size_t i = 0; i < maps->size(); ++i) *(*maps)[i].map.mutable_metadata() = (*kept)->maps(static_cast<int>(i));
+      for (size_t i = 0; i < maps->size(); ++i) {
+        *(*maps)[i].map.mutable_metadata() = (*kept)->maps(static_cast<int>(i));
+      }
       if (replayed != nullptr) *replayed = true;
       return Status::Ok();
     }

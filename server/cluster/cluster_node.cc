@@ -860,6 +860,19 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
   return store_->SetMark(collection, *mark, &requests);
 }
 
+void ClusterNode::DescribePlacement(const std::string& collection, const internal::Placement& p,
+                                    v1::ClusterPlacement* out) const {
+  out->set_collection(collection);
+  out->set_epoch(p.epoch());
+  out->set_copies_wanted(static_cast<uint32_t>(WantedCopies(p, config_.cluster_replication_factor)));
+  for (const std::string& id : p.replicas()) {
+    v1::ClusterCopy* copy = out->add_copies();
+    copy->set_node_id(id);
+    copy->set_primary(id == p.primary());
+    copy->set_in_sync(InSync(p, id));
+  }
+}
+
 Status ClusterNode::SetReplication(const std::string& collection, uint32_t copies, v1::ClusterPlacement* out) {
   Result<internal::Placement> changed = ChangePlacement(
       collection, [](const internal::Placement&) { return true; },
@@ -869,15 +882,7 @@ Status ClusterNode::SetReplication(const std::string& collection, uint32_t copie
     return Status::NotFound("collection '" + collection + "' has no placement: write to it first");
   }
   spdlog::info("cluster: '{}' wants {} copies", collection, copies);
-  out->set_collection(collection);
-  out->set_epoch(changed->epoch());
-  out->set_copies_wanted(copies);
-  for (const std::string& id : changed->replicas()) {
-    v1::ClusterCopy* copy = out->add_copies();
-    copy->set_node_id(id);
-    copy->set_primary(id == changed->primary());
-    copy->set_in_sync(InSync(*changed, id));
-  }
+  DescribePlacement(collection, *changed, out);
   return Status::Ok();
 }
 
@@ -900,18 +905,11 @@ void ClusterNode::Describe(v1::ClusterResponse* out) const {
   Result<std::optional<EtcdValue>> controller = etcd_->Get(prefix_ + "/controller");
   if (controller.ok() && *controller) out->set_controller((*controller)->value);
   for (const auto& [name, placed] : placements) {
-    const internal::Placement& p = placed.placement;
     v1::ClusterPlacement* wire = out->add_placements();
-    wire->set_collection(name);
-    wire->set_epoch(p.epoch());
-    wire->set_copies_wanted(static_cast<uint32_t>(WantedCopies(p, config_.cluster_replication_factor)));
+    DescribePlacement(name, placed.placement, wire);
     uint64_t primary_seq = 0;
-    for (const std::string& id : p.replicas()) {
-      v1::ClusterCopy* copy = wire->add_copies();
-      copy->set_node_id(id);
-      copy->set_primary(id == p.primary());
-      copy->set_in_sync(InSync(p, id));
-      const auto address = addresses.find(id);
+    for (v1::ClusterCopy& copy : *wire->mutable_copies()) {  // each copy's progress, asked of its node
+      const auto address = addresses.find(copy.node_id());
       if (address == addresses.end()) continue;
       grpc::ClientContext context;
       Prepare(&context, 500);
@@ -919,9 +917,9 @@ void ClusterNode::Describe(v1::ClusterResponse* out) const {
       request.set_collection(name);
       internal::ReplicaStateResponse state;
       if (!StubFor(address->second)->State(&context, request, &state).ok()) continue;
-      copy->set_reachable(true);
-      copy->set_seq(state.seq());
-      if (copy->primary()) primary_seq = state.seq();
+      copy.set_reachable(true);
+      copy.set_seq(state.seq());
+      if (copy.primary()) primary_seq = state.seq();
     }
     for (v1::ClusterCopy& copy : *wire->mutable_copies()) {
       if (copy.reachable()) copy.set_lag(primary_seq > copy.seq() ? primary_seq - copy.seq() : 0);

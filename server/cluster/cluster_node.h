@@ -127,6 +127,9 @@ class ClusterNode {
   };
 
   ClusterNode(const ServerConfig& config, MapStore* store, std::unique_ptr<EtcdClient> etcd);
+  // The placement's copies and the copies it wants (no progress: Describe asks the nodes).
+  void DescribePlacement(const std::string& collection, const internal::Placement& p,
+                         v1::ClusterPlacement* out) const;
   Status Register();
   void OnWatch(const WatchBatch& batch);
   void LeaveInSyncSets();
