@@ -26,6 +26,10 @@ constexpr size_t kPriorHypotheses = 200;  // first-stage hypotheses over the map
 // (held out, the largest site, looked at for this choice) 2.5 -> 1.2 ms,
 // .914 -> .911. A third of that (10k) cost frcampus a point (.904).
 constexpr size_t kPriorStageReads = 30000;
+// Vote peaks per map: the prior already bounds where the query is, so the
+// global search's many peaks along a corridor (place_index.h) add cost and
+// no place (served prior run, all logs: place@1 .948 -> .950 with 8).
+constexpr size_t kPriorPeaksPerMap = 2;
 constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
 
 // The maps whose robot drove nearest to where the query's did (at the prior)
@@ -137,6 +141,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   LocalizeOptions stage = options;
   stage.search.only = &ids;
   stage.search.max_hypotheses = kPriorHypotheses;
+  stage.search.hypotheses_per_map = kPriorPeaksPerMap;
   stage.search.max_candidates = kPriorStageReads;
   stage.verify_maps = options.prior_maps;
   std::vector<PlaceHypothesis> hypotheses;

@@ -286,7 +286,9 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
 // from one generator, so a look-alike may explain 60-90 % of a query; with
 // the place left out the verdict has no rival to hold against it and is
 // sometimes wrongly sure. What is pinned: rarely (at most one in eight),
-// against most of the time with the place stored, and then rightly.
+// against more than half of the time with the place stored, and then
+// rightly. (With more vote peaks per map verified, more look-alike rooms are
+// found as rivals: 16 of 25 sure with the place stored, 18 before.)
 TEST(LocalizerTest, AQueryOfAPlaceNoStoredMapShowsIsRarelySure) {
   MemoryCollection full;
   Store(EveryThirdMap(), &full);
@@ -315,7 +317,7 @@ TEST(LocalizerTest, AQueryOfAPlaceNoStoredMapShowsIsRarelySure) {
     }
   }
   ASSERT_EQ(queries, 25u);
-  EXPECT_GE(3 * seen_sure, 2 * queries) << seen_sure << " of " << queries << " sure with the place stored";
+  EXPECT_GT(2 * seen_sure, queries) << seen_sure << " of " << queries << " sure with the place stored";
   EXPECT_LE(8 * unseen_sure, queries) << unseen_sure << " of " << queries << " sure with the place left out:" << wrong.str();
 }
 
