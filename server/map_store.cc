@@ -819,7 +819,8 @@ Result<std::vector<PlaceHypothesis>> MapStore::SearchPlaces(const std::string& c
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
   auto is_excluded = [&](uint64_t id) {
     const auto it = state->map_ids.find(id);
-    return it == state->map_ids.end() || excluded.count(it->second) != 0;
+    return it == state->map_ids.end() || excluded.count(it->second) != 0 ||
+           (options.anchored_only && !state->anchors.Anchor(id));
   };
   return state->places.Search(query, options, is_excluded, stats);
 }

@@ -49,7 +49,8 @@ Result<Method> PaperMethod(v1::Method method, Planner indexed_planner) {
   }
 }
 
-void ToWire(const Verdict& verdict, v1::Localization* out) {
+// hit_ids: the returned hits' map ids (empty: deleted meanwhile).
+void ToWire(const Verdict& verdict, const std::vector<std::string>& hit_ids, v1::Localization* out) {
   out->set_localized(verdict.sure);
   out->set_confidence(verdict.confidence);
   out->set_best_score(verdict.best_score);
@@ -60,6 +61,11 @@ void ToWire(const Verdict& verdict, v1::Localization* out) {
   out->set_fell_back_to_global(verdict.fell_back_to_global);
   out->set_sequence_maps(static_cast<uint32_t>(verdict.sequence_maps));
   out->set_sequence_agreeing(static_cast<uint32_t>(verdict.sequence_agreeing));
+  if (verdict.collection_pose && verdict.collection_pose_hit < hit_ids.size() &&
+      !hit_ids[verdict.collection_pose_hit].empty()) {
+    *out->mutable_collection_pose() = ToProto(*verdict.collection_pose);
+    out->set_collection_pose_map_id(hit_ids[verdict.collection_pose_hit]);
+  }
 }
 
 }  // namespace
@@ -106,7 +112,11 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
                       near.hits.end());
       return near;
     }
-    Localization global = Localize(query, source, options, {}, cancelled, request.with_changes);
+    // Over the anchored maps: the robot asked for a pose in the site frame,
+    // and only they give one (a prior needs anchored maps).
+    LocalizeOptions site = options;
+    site.search.anchored_only = true;
+    Localization global = Localize(query, source, site, {}, cancelled, request.with_changes);
     global.verdict.prior_used = global.verdict.prior_failed = global.verdict.fell_back_to_global = true;
     return global;
   }
@@ -189,17 +199,18 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       Result<IndexedEntry> entry = store_->Indexed(collection, hit.map_id);
       query.hit_ids.push_back(entry.ok() ? entry->map_id : std::string());  // empty: deleted meanwhile
     }
-    // A sure answer against a map anchored by a given pose anchors this map
-    // if it is stored next. Not against a derived anchor: one wrong sure
-    // answer would otherwise anchor a robot's every later map on its own
-    // wrong ones (measured: lmd-bench load --mode fleet, robots locked 13-24 m off).
+    // A sure answer whose site pose comes from a map anchored by a given
+    // pose anchors this map if it is stored next. Not from a derived anchor:
+    // one wrong sure answer would otherwise anchor a robot's every later map
+    // on its own wrong ones (measured: lmd-bench load --mode fleet, robots
+    // locked 13-24 m off).
     const Localization& l = query.localization;
-    if (l.verdict.sure && !l.hits.empty() && l.hits[0].collection_pose && !query.hit_ids[0].empty() &&
-        AnchorIsGiven(collection, query.hit_ids[0])) {
+    const std::string* from = l.verdict.collection_pose ? &query.hit_ids[l.verdict.collection_pose_hit] : nullptr;
+    if (l.verdict.sure && from != nullptr && !from->empty() && AnchorIsGiven(collection, *from)) {
       v1::MapAnchor fix;
-      *fix.mutable_pose() = ToProto(*l.hits[0].collection_pose);
+      *fix.mutable_pose() = ToProto(*l.verdict.collection_pose);
       fix.set_derived(true);
-      fix.set_from_map_id(query.hit_ids[0]);
+      fix.set_from_map_id(*from);
       fix.set_confidence(l.verdict.confidence);
       fixes_.Put(collection, key, fix);
     }
@@ -252,7 +263,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::Retrieve(grpc::CallbackServerContext* 
     if (!query.ok()) return query.status();
     response->set_reduced_depth(query->reduced_depth);
     if (request->method() == v1::METHOD_DEFAULT) {
-      ToWire(query->localization.verdict, response->mutable_localization());
+      ToWire(query->localization.verdict, query->hit_ids, response->mutable_localization());
       for (size_t i = 0; i < query->localization.hits.size(); ++i) {
         if (query->hit_ids[i].empty()) continue;
         *response->add_hits() = DefaultWireHit(request->collection(), query->localization.hits[i],
@@ -322,7 +333,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::DetectChanges(grpc::CallbackServerCont
 
     if (request->method() == v1::METHOD_DEFAULT) {
       const Localization& localization = query->localization;
-      ToWire(localization.verdict, response->mutable_localization());
+      ToWire(localization.verdict, query->hit_ids, response->mutable_localization());
       std::unordered_map<uint64_t, v1::ChangeHit*> by_id;
       for (size_t i = 0; i < localization.hits.size(); ++i) {
         if (query->hit_ids[i].empty()) continue;

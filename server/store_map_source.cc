@@ -31,6 +31,8 @@ bool StoreMapSource::RouteOf(uint64_t map_id, Route* route) const {
 
 std::optional<Pose2> StoreMapSource::AnchorOf(uint64_t map_id) const { return store_->AnchorOf(collection_, map_id); }
 
+bool StoreMapSource::HasAnchors() const { return store_->HasAnchors(collection_); }
+
 std::vector<MapSource::Anchored> StoreMapSource::AnchoredNear(const Point2& centre, double radius_m) const {
   std::vector<Anchored> near = store_->AnchoredNear(collection_, centre, radius_m);
   near.erase(std::remove_if(near.begin(), near.end(),

@@ -30,6 +30,7 @@ class StoreMapSource : public MapSource {
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
   bool RouteOf(uint64_t map_id, Route* route) const override;
   std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
+  bool HasAnchors() const override;
   std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
 
  private:

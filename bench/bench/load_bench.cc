@@ -221,8 +221,8 @@ void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& respo
   robot->by_prior += verdict.prior_used() && !verdict.fell_back_to_global();
   robot->fell_back += verdict.fell_back_to_global();
   robot->by_sequence += verdict.sequence_maps() > 0;
-  const bool posed = response.hits_size() > 0 && response.hits(0).hit().has_collection_pose();
-  const Pose2 got = posed ? FromProto(response.hits(0).hit().collection_pose()) : Pose2{};
+  const bool posed = verdict.has_collection_pose();
+  const Pose2 got = posed ? FromProto(verdict.collection_pose()) : Pose2{};
   const Pose2& truth = map.truth.global_frame;
   const bool right = posed && std::hypot(got.x - truth.x, got.y - truth.y) <= 0.2 &&
                      std::abs(std::remainder(got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
@@ -233,7 +233,7 @@ void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& respo
   robot->wrong_by_prior += sure_wrong && verdict.prior_used() && !verdict.fell_back_to_global();
   robot->wrong_by_sequence += sure_wrong && verdict.sequence_maps() > 0;
   robot->wrong_within_1m += sure_wrong && std::hypot(got.x - truth.x, got.y - truth.y) < 1.0;
-  robot->sure_unposed += verdict.localized() && !posed;  // its top hit's map is not anchored
+  robot->sure_unposed += verdict.localized() && !posed;  // no returned hit that agrees with the top one is anchored
   robot->lost = !(verdict.localized() && posed);
   if (!robot->lost) robot->fix = got, robot->fixed_at = t;
 }

@@ -132,6 +132,11 @@ void PrintLocalization(const v1::Localization& l, bool json) {
     std::printf("%u of the sequence's %u earlier maps fit the first hit's pose\n", l.sequence_agreeing(),
                 l.sequence_maps());
   }
+  if (l.has_collection_pose()) {
+    const v1::Pose2& p = l.collection_pose();
+    std::printf("site pose (%.2f m, %.2f m, %.1f deg), through %s\n", p.x(), p.y(), p.theta() * 180 / M_PI,
+                l.collection_pose_map_id().c_str());
+  }
 }
 
 constexpr const char* kReducedDepthNote =

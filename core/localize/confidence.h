@@ -81,6 +81,12 @@ struct Verdict {
   bool fell_back_to_global = false;  // ... so a global query answered (lmdd, on request)
   size_t sequence_maps = 0;      // a sequence query: its earlier maps
   size_t sequence_agreeing = 0;  // ... of which fit the best hit's pose
+  // The query's own frame in the collection's frame: the best hit's
+  // collection_pose or, where its map is not anchored (stored by a robot
+  // that did not know where it was), that of the best returned hit that
+  // agrees with it and is anchored (Localization::hits[collection_pose_hit]).
+  std::optional<Pose2> collection_pose;
+  size_t collection_pose_hit = 0;
 };
 
 // A verified hit as the verdict sees it.

@@ -121,6 +121,13 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->stats.changes_ms += MsSince(t);
   }
   if (hits.size() > options.top_k) hits.resize(options.top_k);
+  for (size_t i = 0; i < hits.size(); ++i) {
+    if (hits[i].collection_pose && (i == 0 || hits[i].agrees_with_best)) {
+      out->verdict.collection_pose = hits[i].collection_pose;
+      out->verdict.collection_pose_hit = i;
+      break;
+    }
+  }
   out->hits = std::move(hits);
 }
 

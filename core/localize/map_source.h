@@ -20,7 +20,8 @@ class MapSource {
  public:
   virtual ~MapSource() = default;
 
-  // PlaceIndex::Search over the collection's maps.
+  // PlaceIndex::Search over the collection's maps (with
+  // options.anchored_only, over its anchored maps).
   virtual std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
                                               const std::function<bool(uint64_t)>& excluded,
                                               PlaceSearchStats* stats) const = 0;
@@ -50,6 +51,8 @@ class MapSource {
   // The anchor of `map_id`, if it has one (default: no map is anchored).
   // Thread-safe.
   virtual std::optional<Pose2> AnchorOf(uint64_t /*map_id*/) const { return std::nullopt; }
+  // Whether any map is anchored (default: none). Thread-safe.
+  virtual bool HasAnchors() const { return false; }
   // Anchored maps whose box meets the disk (collection frame). Thread-safe.
   virtual std::vector<Anchored> AnchoredNear(const Point2& /*centre*/, double /*radius_m*/) const { return {}; }
 };

@@ -14,7 +14,9 @@ Status MemoryCollection::Add(uint64_t id, PreparedPlace place, std::optional<Rou
 std::vector<PlaceHypothesis> MemoryCollection::Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
                                                       const std::function<bool(uint64_t)>& excluded,
                                                       PlaceSearchStats* stats) const {
-  return index_.Search(query, options, excluded, stats);
+  if (!options.anchored_only) return index_.Search(query, options, excluded, stats);
+  return index_.Search(query, options, [&](uint64_t id) { return (excluded && excluded(id)) || !anchors_.Anchor(id); },
+                       stats);
 }
 
 std::shared_ptr<const PreparedMap> MemoryCollection::Prepared(uint64_t map_id) const {

@@ -32,6 +32,7 @@ class MemoryCollection : public MapSource {
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
   bool RouteOf(uint64_t map_id, Route* route) const override;
   std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
+  bool HasAnchors() const override { return anchors_.size() > 0; }
   std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
 
   // Anchors a stored map in the collection's frame; false if not stored.

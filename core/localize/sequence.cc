@@ -35,8 +35,14 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   Localization out;
   // Every map of the sequence proposes poses for the newest: its own hits,
   // carried to the newest through the odometry. A look-alike that fools the
-  // newest map rarely fools the maps before it too.
-  std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
+  // newest map rarely fools the maps before it too. Only anchored maps can
+  // propose one, so in a site map only they are searched: where lost robots
+  // stored maps without anchors, those would otherwise fill every verified
+  // slot (lmd-bench load --mode fleet: the robots' answers then had no site
+  // pose and they stayed lost).
+  LocalizeOptions site = options;
+  site.search.anchored_only = source.HasAnchors();
+  std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, site, excluded, stop, &out.stats);
   SetCollectionPoses(source, &newest_hits);
   const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),
                                     [](const LocalizedHit& h) { return h.collection_pose.has_value(); });
@@ -56,7 +62,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   if (anchored) {
     for (const SequenceStep& step : earlier) {
       if (stop && stop()) break;
-      std::vector<LocalizedHit> hits = SearchAndVerify(step.query, source, options, excluded, stop, &out.stats);
+      std::vector<LocalizedHit> hits = SearchAndVerify(step.query, source, site, excluded, stop, &out.stats);
       SetCollectionPoses(source, &hits);
       for (const LocalizedHit& h : hits) {
         if (h.collection_pose) propose(Compose(*h.collection_pose, Inverse(step.in_newest)), h.score);
@@ -65,6 +71,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   }
   if (!anchored) {
     // Without a site map, the newest map's hits are judged alone.
+    if (site.search.anchored_only) newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
     Conclude(newest, options, std::move(newest_hits), nullptr, with_changes, &out);
     out.verdict.sequence_maps = earlier.size();
     return out;

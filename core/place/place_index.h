@@ -81,6 +81,10 @@ struct PlaceSearchOptions {
   // When set, only these maps are compared (a prior query's maps near its
   // prior): the others' stored features are passed over unread.
   const std::vector<uint64_t>* only = nullptr;
+  // Only maps anchored in the collection's frame (a site map). Honoured by
+  // the MapSource implementations, which know the anchors; PlaceIndex
+  // itself does not read it.
+  bool anchored_only = false;
 };
 
 // Pose hypothesis for one stored map: db compass = R(k * 90 deg) query compass + translation.

@@ -182,6 +182,41 @@ TEST(LocalizerTest, AMovedCopyOfAStoredMapIsLocalizedToCentimetres) {
   EXPECT_GE(sure, 4u) << "of " << queries;
 }
 
+// The query's pose in the site frame comes from the best hit's anchor or,
+// where that map has none (stored by a robot that did not know where it
+// was), from an anchored hit that agrees with it; with no anchored map among
+// the hits, there is none.
+TEST(LocalizerTest, TheSitePoseComesFromAnAgreeingAnchoredHitWhenTheBestHasNone) {
+  MemoryCollection plain;
+  Store(EveryThirdMap(), &plain);
+  size_t checked = 0;
+  for (size_t q = 4; q < DemoMaps().size() && checked < 3; q += 17) {
+    const LocalMap query = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const Localization first = LocalizeIn(plain, query);
+    EXPECT_FALSE(first.verdict.collection_pose) << q;
+    if (!first.verdict.sure || first.verdict.agreeing == 0) continue;
+    // Every map anchored at its true frame but the best hit's.
+    MemoryCollection anchored;
+    Store(EveryThirdMap(), &anchored);
+    for (size_t i : EveryThirdMap()) {
+      if (i != first.hits[0].map_id) ASSERT_TRUE(anchored.SetAnchor(i, DemoMaps()[i].truth.global_frame));
+    }
+    const Localization l = LocalizeIn(anchored, query);
+    ASSERT_FALSE(l.hits.empty());
+    ASSERT_EQ(l.hits[0].map_id, first.hits[0].map_id) << q;
+    EXPECT_FALSE(l.hits[0].collection_pose);
+    ASSERT_TRUE(l.verdict.collection_pose) << q;
+    ASSERT_LT(l.verdict.collection_pose_hit, l.hits.size());
+    const LocalizedHit& from = l.hits[l.verdict.collection_pose_hit];
+    EXPECT_GT(l.verdict.collection_pose_hit, 0u);
+    EXPECT_TRUE(from.agrees_with_best);
+    EXPECT_LT(TranslationError(*l.verdict.collection_pose, query.truth.global_frame), 0.1) << q;
+    EXPECT_LT(AngleErrorDeg(*l.verdict.collection_pose, query.truth.global_frame), 0.5) << q;
+    ++checked;
+  }
+  EXPECT_GE(checked, 1u) << "no sure query with an agreeing hit";
+}
+
 // Score = overlap - conflict - reverse conflict (weights 1); hits best first,
 // at most top_k, each with the prepared map it was matched against.
 TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {

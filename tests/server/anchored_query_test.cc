@@ -83,6 +83,10 @@ TEST_F(AnchoredQueryTest, APoseHintAnchorsTheMapAndHitsCarryTheCollectionPose) {
   ASSERT_TRUE(response.hits(0).has_collection_pose());
   // The query's own frame in the collection's frame: its simulated global frame.
   EXPECT_LT(Distance(response.hits(0).collection_pose(), DemoMaps()[31].truth.global_frame), 0.1);
+  // The answer's site pose: the first hit's, named by its map.
+  ASSERT_TRUE(response.localization().has_collection_pose());
+  EXPECT_LT(Distance(response.localization().collection_pose(), FromProto(response.hits(0).collection_pose())), 1e-9);
+  EXPECT_EQ(response.localization().collection_pose_map_id(), response.hits(0).map_id());
 }
 
 TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
@@ -144,6 +148,46 @@ TEST_F(AnchoredQueryTest, ASequenceQuerySaysHowManyOfItsMapsAgree) {
   EXPECT_LT(Distance(response.hits(0).collection_pose(), DemoMaps()[newest].truth.global_frame), 0.1);
   EXPECT_EQ(response.localization().sequence_agreeing(), response.hits(0).sequence_agreeing());
   EXPECT_GE(response.hits(0).sequence_agreeing(), 1u);
+}
+
+// Lost robots store maps without anchors; where they crowd a place, a
+// sequence query still answers in the site frame: only anchored maps can
+// give it a site pose, and only they are searched.
+TEST_F(AnchoredQueryTest, ASequenceQueryAnswersInTheSiteFrameWhereUnanchoredMapsCrowd) {
+  const size_t newest = 61;
+  v1::InsertMapsRequest crowd;
+  for (size_t copy = 0; copy < 3; ++copy) {
+    for (size_t i = newest - 1; i <= newest + 1; ++i) {
+      *crowd.add_maps() = OneMapRequest("site", "lost-" + std::to_string(copy) + "-" + std::to_string(i),
+                                        ToProto(DemoMaps()[i])).maps(0);
+    }
+  }
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(crowd, &inserted).ok());
+  v1::RetrieveRequest request = Query(newest - 1);
+  request.set_verify_candidates(3);  // as many as the crowd's copies of the query's own map
+  for (size_t back : {5, 10}) {
+    v1::SequenceMap* step = request.add_sequence();
+    const LocalMap& earlier = DemoMaps()[newest - back];
+    *step->mutable_map() = ToProto(earlier);
+    *step->mutable_in_query() =
+        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
+    step->set_travel_m(static_cast<double>(back));
+  }
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  ASSERT_GT(response.hits_size(), 0);
+  ASSERT_TRUE(response.localization().has_collection_pose());
+  EXPECT_LT(Distance(response.localization().collection_pose(), DemoMaps()[newest].truth.global_frame), 0.1);
+  EXPECT_EQ(response.localization().collection_pose_map_id().rfind("lost-", 0), std::string::npos);
+  // A plain query of the same map is answered from every map: the crowd's
+  // exact copy of it first.
+  v1::RetrieveRequest plain_request = Query(newest - 1);
+  plain_request.set_verify_candidates(3);
+  v1::RetrieveResponse plain;
+  ASSERT_TRUE(server_->client().Retrieve(plain_request, &plain).ok());
+  ASSERT_GT(plain.hits_size(), 0);
+  EXPECT_EQ(plain.hits(0).map_id().rfind("lost-", 0), 0u) << plain.hits(0).map_id();
 }
 
 TEST_F(AnchoredQueryTest, ASureAnswerAnchorsTheMapInsertedNext) {
