@@ -169,10 +169,14 @@ Result<World> LogWorld(const LoadOptions& options, size_t ticks) {
 
 // A robot of --mode fleet: it starts where it knows it is (a dock: its
 // first map's true pose) and tracks with priors from its last fix and its
-// drifting odometry (a failed prior answered globally in the same call);
-// after an answer lmdd is not sure of, or one without a pose in the site
-// frame, it is lost and asks with a sequence (its maps 3 and 6 ticks back)
-// until lmdd is sure again.
+// drifting odometry. An answer lmdd is not sure of, or a failed prior (where
+// no stored map shows its place, every prior fails), leaves it on odometry
+// from its last fix, the prior growing with the travel since; once that
+// drift passes kMaxPriorRadiusM it is lost and asks with a sequence (its
+// maps 3 and 6 ticks back) until lmdd is sure again. Becoming lost at the
+// first unsure answer instead (and asking for a global answer with each
+// prior) gave 0.79 right fixes at 30 robots against 0.96, with 30 % of the
+// answers costly sequence queries.
 struct FleetRobot {
   std::mt19937_64 rng;
   bool lost = false;
@@ -187,6 +191,7 @@ struct FleetRobot {
 };
 
 constexpr size_t kSequenceStepTicks = 3;
+constexpr double kMaxPriorRadiusM = 5.0;  // about 30 m of travel at OdometryDrift's defaults
 
 void AskAsTracked(const std::vector<LocalMap>& maps, size_t t, FleetRobot* robot, v1::DetectChangesRequest* request) {
   const OdometryDrift drift;
@@ -199,7 +204,7 @@ void AskAsTracked(const std::vector<LocalMap>& maps, size_t t, FleetRobot* robot
     *prior->mutable_pose() = ToProto(Compose(robot->fix, Inverse(odometry)));
     prior->set_radius_m(DriftRadius(travel, drift));
     prior->set_heading_sigma_rad(2 * M_PI / 180 + drift.heading_rad_per_m * std::abs(travel));
-    prior->set_fall_back_to_global(true);
+    prior->set_fall_back_to_global(false);
     return;
   }
   for (size_t k = 1; k <= 2 && t >= k * kSequenceStepTicks; ++k) {
@@ -215,7 +220,8 @@ void AskAsTracked(const std::vector<LocalMap>& maps, size_t t, FleetRobot* robot
 
 // Scores the answer against the truth (the site frame is the world's) and
 // updates the robot's state.
-void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& response, FleetRobot* robot) {
+void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesResponse& response, FleetRobot* robot) {
+  const LocalMap& map = maps[t];
   const v1::Localization& verdict = response.localization();
   ++robot->asked;
   robot->by_prior += verdict.prior_used() && !verdict.fell_back_to_global();
@@ -234,8 +240,12 @@ void Track(const LocalMap& map, size_t t, const v1::DetectChangesResponse& respo
   robot->wrong_by_sequence += sure_wrong && verdict.sequence_maps() > 0;
   robot->wrong_within_1m += sure_wrong && std::hypot(got.x - truth.x, got.y - truth.y) < 1.0;
   robot->sure_unposed += verdict.localized() && !posed;  // no returned hit that agrees with the top one is anchored
-  robot->lost = !(verdict.localized() && posed);
-  if (!robot->lost) robot->fix = got, robot->fixed_at = t;
+  if (verdict.localized() && posed) {
+    robot->lost = false, robot->fix = got, robot->fixed_at = t;
+  } else if (!robot->lost) {
+    const double travel = map.truth.travel_start - maps[robot->fixed_at].truth.travel_start;
+    robot->lost = DriftRadius(travel, OdometryDrift{}) > kMaxPriorRadiusM;
+  }
 }
 
 void PrintFleet(const std::vector<FleetRobot>& fleet) {
@@ -365,7 +375,7 @@ int RunLoadBench(int argc, char** argv) {
           v1::DetectChangesResponse response;
           const grpc::Status status = (*client)->DetectChanges(request, &response);
           if (status.ok() && response.hits_size() > 0) top_hits[r][t] = response.hits(0).hit().map_id();
-          if (status.ok() && options.fleet) Track(robot_maps[r][t], t, response, &fleet[r]);
+          if (status.ok() && options.fleet) Track(robot_maps[r], t, response, &fleet[r]);
           detects_ok += status.ok();
           reduced += status.ok() && response.reduced_depth();
           return status;
