@@ -52,6 +52,21 @@ class AnchoredQueryTest : public ::testing::Test {
     return request;
   }
 
+  // Demo map `newest` with the maps 5 and 10 before it as its sequence
+  // (exact odometry).
+  v1::RetrieveRequest SequenceQuery(size_t newest) const {
+    v1::RetrieveRequest request = Query(newest - 1);
+  for (size_t back : {5, 10}) {
+    v1::SequenceMap* step = request.add_sequence();
+    const LocalMap& earlier = DemoMaps()[newest - back];
+    *step->mutable_map() = ToProto(earlier);
+    *step->mutable_in_query() =
+        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
+    step->set_travel_m(static_cast<double>(back));
+  }
+    return request;
+  }
+
   uint64_t StoredMaps() const {
     v1::ListCollectionsResponse listed;
     EXPECT_TRUE(server_->client().ListCollections(&listed).ok());
@@ -132,15 +147,7 @@ TEST_F(AnchoredQueryTest, AWrongPriorSaysSoAndMayFallBackToAGlobalQuery) {
 
 TEST_F(AnchoredQueryTest, ASequenceQuerySaysHowManyOfItsMapsAgree) {
   const size_t newest = 61;
-  v1::RetrieveRequest request = Query(newest - 1);
-  for (size_t back : {5, 10}) {
-    v1::SequenceMap* step = request.add_sequence();
-    const LocalMap& earlier = DemoMaps()[newest - back];
-    *step->mutable_map() = ToProto(earlier);
-    *step->mutable_in_query() =
-        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
-    step->set_travel_m(static_cast<double>(back));
-  }
+  v1::RetrieveRequest request = SequenceQuery(newest);
   v1::RetrieveResponse response;
   ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
   EXPECT_EQ(response.localization().sequence_maps(), 2u);
@@ -164,16 +171,8 @@ TEST_F(AnchoredQueryTest, ASequenceQueryAnswersInTheSiteFrameWhereUnanchoredMaps
   }
   v1::InsertMapsResponse inserted;
   ASSERT_TRUE(server_->client().InsertMaps(crowd, &inserted).ok());
-  v1::RetrieveRequest request = Query(newest - 1);
+  v1::RetrieveRequest request = SequenceQuery(newest);
   request.set_verify_candidates(3);  // as many as the crowd's copies of the query's own map
-  for (size_t back : {5, 10}) {
-    v1::SequenceMap* step = request.add_sequence();
-    const LocalMap& earlier = DemoMaps()[newest - back];
-    *step->mutable_map() = ToProto(earlier);
-    *step->mutable_in_query() =
-        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
-    step->set_travel_m(static_cast<double>(back));
-  }
   v1::RetrieveResponse response;
   ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
   ASSERT_GT(response.hits_size(), 0);
