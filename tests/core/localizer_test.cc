@@ -199,7 +199,9 @@ TEST(LocalizerTest, TheSitePoseComesFromAnAgreeingAnchoredHitWhenTheBestHasNone)
     MemoryCollection anchored;
     Store(EveryThirdMap(), &anchored);
     for (size_t i : EveryThirdMap()) {
-      if (i != first.hits[0].map_id) ASSERT_TRUE(anchored.SetAnchor(i, DemoMaps()[i].truth.global_frame));
+      if (i != first.hits[0].map_id) {
+        ASSERT_TRUE(anchored.SetAnchor(i, DemoMaps()[i].truth.global_frame));
+      }
     }
     const Localization l = LocalizeIn(anchored, query);
     ASSERT_FALSE(l.hits.empty());
