@@ -122,7 +122,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   }
   if (hits.size() > options.top_k) hits.resize(options.top_k);
   for (size_t i = 0; i < hits.size(); ++i) {
-    if (hits[i].collection_pose && (i == 0 || hits[i].agrees_with_best)) {
+    if (hits[i].collection_pose && hits[i].agrees_with_best) {  // the best agrees with itself
       out->verdict.collection_pose = hits[i].collection_pose;
       out->verdict.collection_pose_hit = i;
       break;
