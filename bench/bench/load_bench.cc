@@ -184,7 +184,7 @@ struct FleetRobot {
   size_t fixed_at = 0;  // ... the tick of that map
   // Outcomes, over its answered DetectChanges.
   size_t asked = 0, right = 0, sure = 0, sure_wrong = 0, sure_unposed = 0, by_prior = 0, by_sequence = 0,
-         fell_back = 0;
+         prior_failed = 0;
   // Sure and wrong, by how it was asked, and those off by less than 1 m
   // (the right place at a slightly wrong pose).
   size_t wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
@@ -224,8 +224,8 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   const LocalMap& map = maps[t];
   const v1::Localization& verdict = response.localization();
   ++robot->asked;
-  robot->by_prior += verdict.prior_used() && !verdict.fell_back_to_global();
-  robot->fell_back += verdict.fell_back_to_global();
+  robot->by_prior += verdict.prior_used();
+  robot->prior_failed += verdict.prior_failed();
   robot->by_sequence += verdict.sequence_maps() > 0;
   const bool posed = verdict.has_collection_pose();
   const Pose2 got = posed ? FromProto(verdict.collection_pose()) : Pose2{};
@@ -236,7 +236,7 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   robot->sure += verdict.localized();
   const bool sure_wrong = verdict.localized() && posed && !right;
   robot->sure_wrong += sure_wrong;
-  robot->wrong_by_prior += sure_wrong && verdict.prior_used() && !verdict.fell_back_to_global();
+  robot->wrong_by_prior += sure_wrong && verdict.prior_used();
   robot->wrong_by_sequence += sure_wrong && verdict.sequence_maps() > 0;
   robot->wrong_within_1m += sure_wrong && std::hypot(got.x - truth.x, got.y - truth.y) < 1.0;
   robot->sure_unposed += verdict.localized() && !posed;  // no returned hit that agrees with the top one is anchored
@@ -255,16 +255,15 @@ void PrintFleet(const std::vector<FleetRobot>& fleet) {
     all.sure_unposed += r.sure_unposed;
     all.wrong_by_prior += r.wrong_by_prior, all.wrong_by_sequence += r.wrong_by_sequence;
     all.wrong_within_1m += r.wrong_within_1m;
-    all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.fell_back += r.fell_back;
+    all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.prior_failed += r.prior_failed;
   }
   const double n = std::max<double>(1.0, static_cast<double>(all.asked));
   std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg), sure %zu (%.3f), "
               "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
-              "%zu; by prior %zu, prior failed and answered globally %zu, by sequence %zu, global %zu\n",
+              "%zu; by prior %zu (of them failed %zu), by sequence %zu, global %zu\n",
               all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
               all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed,
-              all.by_prior, all.fell_back,
-              all.by_sequence, all.asked - all.by_prior - all.fell_back - all.by_sequence);
+              all.by_prior, all.prior_failed, all.by_sequence, all.asked - all.by_prior - all.by_sequence);
 }
 
 }  // namespace
