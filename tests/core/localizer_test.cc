@@ -325,7 +325,8 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
 // sometimes wrongly sure. What is pinned: rarely (at most one in eight),
 // against more than half of the time with the place stored, and then
 // rightly. (With more vote peaks per map verified, more look-alike rooms are
-// found as rivals: 16 of 25 sure with the place stored, 18 before.)
+// found as rivals: 16 of 25 sure with the place stored, below the two
+// thirds this test asked for before.)
 TEST(LocalizerTest, AQueryOfAPlaceNoStoredMapShowsIsRarelySure) {
   MemoryCollection full;
   Store(EveryThirdMap(), &full);

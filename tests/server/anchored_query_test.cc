@@ -56,14 +56,14 @@ class AnchoredQueryTest : public ::testing::Test {
   // (exact odometry).
   v1::RetrieveRequest SequenceQuery(size_t newest) const {
     v1::RetrieveRequest request = Query(newest - 1);
-  for (size_t back : {5, 10}) {
-    v1::SequenceMap* step = request.add_sequence();
-    const LocalMap& earlier = DemoMaps()[newest - back];
-    *step->mutable_map() = ToProto(earlier);
-    *step->mutable_in_query() =
-        ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
-    step->set_travel_m(static_cast<double>(back));
-  }
+    for (size_t back : {5, 10}) {
+      v1::SequenceMap* step = request.add_sequence();
+      const LocalMap& earlier = DemoMaps()[newest - back];
+      *step->mutable_map() = ToProto(earlier);
+      *step->mutable_in_query() =
+          ToProto(Compose(Inverse(DemoMaps()[newest].truth.global_frame), earlier.truth.global_frame));
+      step->set_travel_m(static_cast<double>(back));
+    }
     return request;
   }
 
