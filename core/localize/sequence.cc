@@ -46,6 +46,9 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   SetCollectionPoses(source, &newest_hits);
   const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),
                                     [](const LocalizedHit& h) { return h.collection_pose.has_value(); });
+  // What each map of the sequence showed already: its verified hits, with
+  // its own frame in the collection's frame (0: the newest, s + 1: earlier[s]).
+  std::vector<std::vector<LocalizedHit>> shown(earlier.size() + 1);
   std::vector<Hypothesis> hypotheses;
   auto propose = [&](const Pose2& pose, double single) {
     for (Hypothesis& h : hypotheses) {
@@ -57,18 +60,34 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
     hypotheses.push_back({pose, single, {}, 0.0, 0});
   };
   for (const LocalizedHit& h : newest_hits) {
-    if (h.collection_pose) propose(*h.collection_pose, h.score);
+    if (h.collection_pose) propose(*h.collection_pose, h.score), shown[0].push_back(h);
   }
   if (anchored) {
-    for (const SequenceStep& step : earlier) {
+    for (size_t s = 0; s < earlier.size(); ++s) {
       if (stop && stop()) break;
-      std::vector<LocalizedHit> hits = SearchAndVerify(step.query, source, site, excluded, stop, &out.stats);
+      std::vector<LocalizedHit> hits = SearchAndVerify(earlier[s].query, source, site, excluded, stop, &out.stats);
       SetCollectionPoses(source, &hits);
       for (const LocalizedHit& h : hits) {
-        if (h.collection_pose) propose(Compose(*h.collection_pose, Inverse(step.in_newest)), h.score);
+        if (!h.collection_pose) continue;
+        propose(Compose(*h.collection_pose, Inverse(earlier[s].in_newest)), h.score);
+        shown[s + 1].push_back(h);
       }
     }
   }
+  // A map's best verified hit within `prior` of where a hypothesis puts it:
+  // evidence already in hand. The search near the hypothesis matches the
+  // maps whose robots drove nearest, which need not be the ones that show
+  // this map's view best (a map matched at 0.95 by its own search scored
+  // 0.11 there: fr079's map 105 in process, 3-map sequence).
+  auto best_shown = [&](size_t k, const Prior& prior) -> const LocalizedHit* {
+    const LocalizedHit* best = nullptr;
+    for (const LocalizedHit& h : shown[k]) {
+      if (Near(*h.collection_pose, prior.pose, prior.radius_m, prior.heading_sigma_rad) && (!best || h.score > best->score)) {
+        best = &h;
+      }
+    }
+    return best;
+  };
   if (!anchored) {
     // Without a site map, the newest map's hits are judged alone.
     if (site.search.anchored_only) newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
@@ -96,10 +115,13 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
     at.heading_sigma_rad = options.match.window_deg * M_PI / 180;
     const Localization here = LocalizeNear(newest, source, near_options, at, excluded, stop);
     out.stats.maps_matched += here.stats.maps_matched;
-    if (here.hits.empty()) continue;
-    h.hit = here.hits[0];
+    const LocalizedHit* newest_shown = best_shown(0, at);
+    if (!here.hits.empty()) h.hit = here.hits[0];
+    if (newest_shown && (here.hits.empty() || newest_shown->score > h.hit.score)) h.hit = *newest_shown;
+    if (!h.hit.db) continue;
     double total = h.hit.score;
-    for (const SequenceStep& step : earlier) {
+    for (size_t s = 0; s < earlier.size(); ++s) {
+      const SequenceStep& step = earlier[s];
       const double heading_error = options.sequence_drift_rad_per_m * step.travel_m;
       Prior prior;
       prior.pose = Compose(h.newest, step.in_newest);
@@ -108,7 +130,8 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
       prior.heading_sigma_rad = heading_error + options.match.window_deg * M_PI / 180;
       const Localization l = LocalizeNear(step.query, source, near_options, prior, excluded, stop);
       out.stats.maps_matched += l.stats.maps_matched;
-      const double score = l.hits.empty() ? 0.0 : l.hits[0].score;
+      const LocalizedHit* step_shown = best_shown(s + 1, prior);
+      const double score = std::max(l.hits.empty() ? 0.0 : l.hits[0].score, step_shown ? step_shown->score : 0.0);
       total += score;
       h.agreeing += score >= options.confidence.min_score;
     }

@@ -13,6 +13,7 @@
 #include "core/eval/ground_truth.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localize/memory_collection.h"
+#include "core/localize/sequence.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
 #include "core/sim/change.h"
@@ -217,6 +218,40 @@ TEST(LocalizerTest, TheSitePoseComesFromAnAgreeingAnchoredHitWhenTheBestHasNone)
     ++checked;
   }
   EXPECT_GE(checked, 1u) << "no sure query with an agreeing hit";
+}
+
+// A sequence answer at a place the newest map's own search verified keeps
+// that fit (or a better one): the search near each hypothesis matches the
+// maps whose robots drove nearest, which need not show the view best.
+TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
+  MemoryCollection collection;
+  for (size_t i : EveryThirdMap()) {
+    ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
+    ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
+  }
+  size_t compared = 0;
+  for (size_t q = 13; q < DemoMaps().size(); q += 12) {
+    const LocalMap newest_map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalQuery newest = PrepareLocalQuery(newest_map, kOptions);
+    std::vector<SequenceStep> earlier;
+    for (size_t back : {size_t{4}, size_t{8}}) {
+      const LocalMap& map = DemoMaps()[q - back];
+      earlier.push_back({PrepareLocalQuery(map, kOptions), Compose(Inverse(newest_map.truth.global_frame),
+                                                                   map.truth.global_frame), double(back)});
+    }
+    const Localization alone = Localize(newest, collection, kOptions);
+    const Localization sequence = LocalizeSequence(newest, earlier, collection, kOptions);
+    if (alone.hits.empty() || sequence.hits.empty() || !alone.hits[0].collection_pose ||
+        !sequence.hits[0].collection_pose) {
+      continue;
+    }
+    if (TranslationError(*alone.hits[0].collection_pose, *sequence.hits[0].collection_pose) > 1.0) continue;
+    // A sequence hit's score is the sequence's mean; its parts are the newest map's own.
+    const LocalizedHit& hit = sequence.hits[0];
+    EXPECT_GE(hit.overlap - hit.conflict - hit.reverse_conflict, alone.hits[0].score - 1e-9) << q;
+    ++compared;
+  }
+  EXPECT_GE(compared, 10u);
 }
 
 // Score = overlap - conflict - reverse conflict (weights 1); hits best first,
