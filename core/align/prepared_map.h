@@ -41,10 +41,20 @@ struct PreparedMapOptions {
   // Scans 10 cm apart and within 5 deg clear nearly the same 10 cm cells:
   // one is traced.
   bool free_space = true;
+  //
+  // A beam with no return clears nothing here: it met glass, a dark or
+  // steep surface as often as open space, and the free space it gave put
+  // one place's walls in another map's of the same place (its share of the
+  // other's observed points in free space, confidence.h). On aces, fr079,
+  // intel and orebro (300 queries each, in process), right answers unsure
+  // only for a rival that was a map of the same place at the right pose:
+  // 149 clearing 30 m, 40 clearing none. Served, held-out logs: sure 0.355
+  // -> 0.394 of the queries, right 98.52 -> 98.63 %.
   GridOptions free_grid = [] {
     GridOptions grid;
     grid.min_scan_spacing_m = 0.25;
     grid.min_scan_turn_deg = 5.0;
+    grid.no_return_clear_m = 0.0;
     return grid;
   }();
 };
