@@ -146,24 +146,33 @@ grpc::Status LmdClient::InsertMaps(const v1::InsertMapsRequest& request, v1::Ins
 grpc::Status LmdClient::StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
                                          v1::InsertMapsResponse* response) const {
   const std::string collection = requests.empty() ? "" : requests.front().metadata().collection();
-  auto context = NewContext(collection, std::chrono::system_clock::now() + options_.deadline);
-  Stub* stub = routes_ ? routes_->For(collection, /*write=*/true) : stub_.get();  // a stream goes to the primary
-  auto writer = stub->StreamInsertMaps(context.get(), response);
-  for (const auto& request : requests) {
-    if (!writer->Write(request)) break;  // the server ended the stream; Finish says why
+  // With a request id on every map lmdd names itself, a retried stream
+  // stores each map once: the maps stored before the failure are replayed.
+  std::vector<v1::InsertMapRequest> sent = requests;
+  for (v1::InsertMapRequest& request : sent) {
+    if (request.metadata().map_id().empty() && request.request_id().empty()) request.set_request_id(RandomRequestId());
   }
-  writer->WritesDone();
-  const grpc::Status status = writer->Finish();
-  if (!status.ok()) {
-    response->clear_maps();
-    const auto& trailers = context->GetServerTrailingMetadata();
-    const auto stored = trailers.find(kStoredMapsMetadata);
-    const size_t count = stored == trailers.end()
-                             ? 0
-                             : std::strtoul(std::string(stored->second.data(), stored->second.size()).c_str(), nullptr, 10);
-    for (size_t i = 0; i < std::min(count, requests.size()); ++i) *response->add_maps() = requests[i].metadata();
-  }
-  return status;
+  auto stream = [&](grpc::ClientContext* context, Stub* stub) {
+    response->Clear();
+    auto writer = stub->StreamInsertMaps(context, response);
+    for (const auto& request : sent) {
+      if (!writer->Write(request)) break;  // the server ended the stream; Finish says why
+    }
+    writer->WritesDone();
+    const grpc::Status status = writer->Finish();
+    if (!status.ok()) {
+      response->clear_maps();
+      const auto& trailers = context->GetServerTrailingMetadata();
+      const auto stored = trailers.find(kStoredMapsMetadata);
+      const size_t count = stored == trailers.end() ? 0
+                                                    : std::strtoul(std::string(stored->second.data(),
+                                                                               stored->second.size()).c_str(),
+                                                                   nullptr, 10);
+      for (size_t i = 0; i < std::min(count, sent.size()); ++i) *response->add_maps() = sent[i].metadata();
+    }
+    return status;
+  };
+  return WithRetries(collection, stream, true, nullptr, /*write=*/true);  // a stream goes to the primary
 }
 
 grpc::Status LmdClient::GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const {

@@ -76,10 +76,13 @@ class LmdClient {
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;
   // Streams the requests as one client stream (lmdd writes and acknowledges
-  // them in order; the response lists the stored maps). Not retried. When the
-  // stream ends with an error (a bad map, say), the maps before it are stored
-  // all the same: the response then lists those requests' metadata as sent
-  // (an id lmdd would have assigned is not known then).
+  // them in order; the response lists the stored maps). Retried as a whole
+  // like InsertMaps: every map without a map_id gets a random request_id
+  // unless it has one, so the maps an interrupted stream stored are replayed,
+  // not stored twice. When the stream ends with an error (a bad map, say),
+  // the maps before it are stored all the same: the response then lists
+  // those requests' metadata as sent (an id lmdd would have assigned is not
+  // known then).
   grpc::Status StreamInsertMaps(const std::vector<v1::InsertMapRequest>& requests,
                                 v1::InsertMapsResponse* response) const;
   grpc::Status GetMap(const v1::GetMapRequest& request, v1::GetMapResponse* response) const;

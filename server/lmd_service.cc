@@ -154,7 +154,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     stored = store_->InsertMaps(&maps, limits, &evicted, nullptr, kept, &replayed);
   }
   if (!stored.ok()) return stored;
-  response->set_replayed(replayed);
+  if (replayed) response->set_replayed(true);  // a stream's messages add up
   // Prepared for scan matching already: the first query that hits them reuses it.
   for (size_t i = 0; i < maps.size() && !replayed; ++i) {
     prepared_.Put(maps[i].map.metadata().collection(), maps[i].index_id, described[i]->place.map);
@@ -183,6 +183,12 @@ grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext
     if (!unique.ok()) return unique;
     if (cluster_ != nullptr && BatchCollection(*request).empty()) {
       return Status::InvalidArgument("in a cluster, one InsertMaps call holds maps of one collection");
+    }
+    for (int i = 0; i < request->maps_size(); ++i) {
+      if (!request->maps(i).request_id().empty()) {
+        return Status::InvalidArgument("maps[" + std::to_string(i) +
+                                       "].request_id is for StreamInsertMaps: InsertMaps takes the request's request_id");
+      }
     }
     if (!request->request_id().empty() && BatchCollection(*request).empty()) {
       return Status::InvalidArgument("an InsertMaps call with a request_id holds maps of one collection");

@@ -29,7 +29,7 @@ void StreamInsertReactor::OnReadDone(bool ok) {
 
 void StreamInsertReactor::Store() {
   Status status = runner_->Authorize(context_, request_.metadata().collection(), Access::kWrite);
-  if (status.ok()) status = service_->Insert({&request_}, index_, /*request_id=*/"", response_);
+  if (status.ok()) status = service_->Insert({&request_}, index_, request_.request_id(), response_);
   if (!status.ok()) return Done(status);
   ++index_;
   StartRead(&request_);

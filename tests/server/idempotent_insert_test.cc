@@ -1,6 +1,8 @@
 // Retried inserts: a request id lmdd has kept is answered again without
-// storing its maps twice (InsertMapsRequest.request_id).
+// storing its maps twice (InsertMapsRequest.request_id, and each message's
+// InsertMapRequest.request_id in a stream).
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -97,6 +99,42 @@ TEST_F(IdempotentInsertTest, BadRequestIdsAreRefusedNamingTheField) {
   const grpc::Status mixed = server.client().InsertMaps(two_collections, &inserted);
   EXPECT_EQ(mixed.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(mixed.error_message().find("request_id"), std::string::npos) << mixed.error_message();
+  EXPECT_EQ(StoredMaps(server), 0u);
+}
+
+// A stream sent again after it was cut off (its answer lost) stores each of
+// its maps once: the messages lmdd kept are answered with the ids it gave
+// them, the rest are stored.
+TEST_F(IdempotentInsertTest, AStreamSentAgainStoresEachOfItsMapsOnce) {
+  TestServer server(dir_.path());
+  std::vector<v1::InsertMapRequest> stream;
+  for (int i = 0; i < 3; ++i) {
+    stream.push_back(OneMapRequest("site", "", SquareRoomMap(12 + i)).maps(0));
+    stream.back().set_request_id("tick-" + std::to_string(i));
+  }
+  const std::vector<v1::InsertMapRequest> cut_off(stream.begin(), stream.begin() + 2);
+  v1::InsertMapsResponse first, again;
+  ASSERT_TRUE(server.client().StreamInsertMaps(cut_off, &first).ok());
+  EXPECT_FALSE(first.replayed());
+  ASSERT_EQ(first.maps_size(), 2);
+  EXPECT_EQ(StoredMaps(server), 2u);
+  ASSERT_TRUE(server.client().StreamInsertMaps(stream, &again).ok());
+  EXPECT_TRUE(again.replayed());
+  ASSERT_EQ(again.maps_size(), 3);
+  EXPECT_EQ(again.maps(0).map_id(), first.maps(0).map_id());
+  EXPECT_EQ(again.maps(1).map_id(), first.maps(1).map_id());
+  EXPECT_EQ(again.maps(2).point_count(), 14u);
+  EXPECT_EQ(StoredMaps(server), 3u);
+}
+
+TEST_F(IdempotentInsertTest, AMapsOwnRequestIdIsRefusedOutsideAStream) {
+  TestServer server(dir_.path());
+  v1::InsertMapsRequest request = OneMapRequest("site", "", SquareRoomMap(12));
+  request.mutable_maps(0)->set_request_id("tick-1");
+  v1::InsertMapsResponse inserted;
+  const grpc::Status refused = server.client().InsertMaps(request, &inserted);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("maps[0].request_id"), std::string::npos) << refused.error_message();
   EXPECT_EQ(StoredMaps(server), 0u);
 }
 
