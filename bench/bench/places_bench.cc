@@ -1,5 +1,5 @@
 // lmd-bench places --maps N [--queries Q] [--seed S] [--threads T] [--json] [--cache-mb M]
-//                  [--check-every K] [--csv FILE] [--max-bucket B]
+//                  [--check-every K] [--csv FILE] [--max-bucket B] [--max-candidates C]
 //
 // Protocol:
 //   1. Build. The simulator streams N local maps of the built-in world
@@ -32,9 +32,10 @@
 //
 // Output: a report on stdout (progress bars on stderr); with --json the last
 // stdout line is one JSON object with the figures; --csv FILE writes one row
-// per query (its answer, its scores, its costs). --max-bucket B (an
-// experiment, not the product) runs the first stage with
-// PlaceSearchOptions::max_bucket = B instead of its default.
+// per query (its answer, its scores, its costs). --max-bucket B and
+// --max-candidates C (experiments, not the product) run the first stage with
+// PlaceSearchOptions::max_bucket = B or max_candidates = C instead of its
+// defaults.
 #include "bench/bench/places_bench.h"
 
 #include <sys/resource.h>
@@ -82,12 +83,14 @@ struct Args {
   size_t check_every = 100; // maps whose features are compared with PreparePlace's (0 = none)
   std::string csv;          // per-query rows, if set
   long max_bucket = -1;     // PlaceSearchOptions::max_bucket override; -1 = the product's
+  long max_candidates = -1; // PlaceSearchOptions::max_candidates override; -1 = the product's
 };
 
 void Usage() {
   std::fprintf(stderr,
                "usage: lmd-bench places --maps N [--queries Q] [--seed S] [--threads T] [--json]\n"
-               "                        [--cache-mb M] [--check-every K] [--csv FILE] [--max-bucket B]\n");
+               "                        [--cache-mb M] [--check-every K] [--csv FILE] [--max-bucket B]\n"
+               "                        [--max-candidates C]\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
@@ -131,6 +134,9 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--max-bucket") {
       if (!number("--max-bucket", 0, 1e9, &x)) return false;
       args->max_bucket = static_cast<long>(x);
+    } else if (a == "--max-candidates") {
+      if (!number("--max-candidates", 0, 1e12, &x)) return false;
+      args->max_candidates = static_cast<long>(x);
     } else if (a == "--csv") {
       if (i + 1 >= argc) {
         std::fprintf(stderr, "lmd-bench places: --csv needs a value\n");
@@ -438,6 +444,7 @@ int RunPlacesBench(int argc, char** argv) {
   if (!ParseArgs(argc, argv, &args)) return 2;
   LocalizeOptions options;  // the product's defaults, as lmdd serves them
   if (args.max_bucket >= 0) options.search.max_bucket = static_cast<size_t>(args.max_bucket);
+  if (args.max_candidates >= 0) options.search.max_candidates = static_cast<size_t>(args.max_candidates);
   const int threads = std::max(1, args.threads);
   const auto run_start = std::chrono::steady_clock::now();
   const double run_cpu0 = ProcessCpuS();
@@ -642,10 +649,14 @@ int RunPlacesBench(int argc, char** argv) {
   const double sure_share = static_cast<double>(sure) / nq;
   const double right_share = sure ? static_cast<double>(sure_right) / static_cast<double>(sure) : 0.0;
 
+  std::string overrides;
+  if (args.max_bucket >= 0) overrides += ", max_bucket " + std::to_string(args.max_bucket) + " (not the default)";
+  if (args.max_candidates >= 0) {
+    overrides += ", max_candidates " + std::to_string(args.max_candidates) + " (not the default)";
+  }
   std::printf("lmd-bench places: %zu maps (seed %llu), %zu queries, %d threads, prepared-map cache %zu MiB%s\n",
               n_maps, static_cast<unsigned long long>(args.seed), results.size(), threads, args.cache_mb,
-              args.max_bucket >= 0 ? (", max_bucket " + std::to_string(args.max_bucket) + " (not the default)").c_str()
-                                   : "");
+              overrides.c_str());
   std::printf("  build                   %.1f s wall, %.1f s CPU: simulate %.1f s, describe %.1f s wall "
               "(%.2f ms CPU/map), index add %.2f s\n",
               build_wall_s, build_cpu_s, simulate_s, describe_wall_s, describe_cpu_ms / nm, add_wall_s);
