@@ -188,6 +188,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
     if (busy && config_.busy_search_candidates > 0 &&
         (options.search.max_candidates == 0 || config_.busy_search_candidates < options.search.max_candidates)) {
       options.search.max_candidates = config_.busy_search_candidates;
+      options.search.min_candidates_per_map = 0;  // a busy lmdd's bound is the bound
       query.reduced_depth = true;
     }
     const LocalQuery local = PrepareLocalQuery(MethodView(FromProto(*request.map)), options, &query.described->place);

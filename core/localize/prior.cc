@@ -143,6 +143,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   stage.search.max_hypotheses = kPriorHypotheses;
   stage.search.hypotheses_per_map = kPriorPeaksPerMap;
   stage.search.max_candidates = kPriorStageReads;
+  stage.search.min_candidates_per_map = 0;  // the prior's maps are few whatever the collection holds
   stage.verify_maps = options.prior_maps;
   std::vector<PlaceHypothesis> hypotheses;
   if (options.prior_first_stage && !ids.empty()) {

@@ -275,9 +275,11 @@ std::vector<PlaceHypothesis> PlaceIndex::Search(const PlaceFeatures& query, cons
     }
     order.push_back({crowd, i});
   }
-  if (options.max_candidates > 0) std::sort(order.begin(), order.end());
+  const size_t bound =
+      options.max_candidates == 0 ? 0 : std::max(options.max_candidates, options.min_candidates_per_map * size());
+  if (bound > 0) std::sort(order.begin(), order.end());
   for (const auto& [crowd, index] : order) {
-    if (options.max_candidates > 0 && work.candidates >= options.max_candidates) break;
+    if (bound > 0 && work.candidates >= bound) break;
     const PlaceFeature& qf = query.features[index];
     ++work.features_used;
     pairs.clear();

@@ -367,6 +367,33 @@ TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
   EXPECT_EQ(hypotheses[0].map_id, 140u);
 }
 
+// The bound grows with the collection: with min_candidates_per_map, a tiny
+// fixed bound still reads that many stored features per stored map.
+TEST(PlaceIndexTest, TheCandidateBoundGrowsWithTheCollection) {
+  PlaceIndex index;
+  AddStored(&index);
+  const PlaceFeatures query = Describe(MovedPoints(DemoMaps()[140], KnownMoves()[1]));
+  PlaceSearchOptions unbounded;
+  unbounded.max_candidates = 0;
+  PlaceSearchStats full;
+  index.Search(query, unbounded, {}, &full);
+  PlaceSearchOptions fixed;
+  fixed.max_candidates = 1;
+  fixed.min_candidates_per_map = 0;
+  PlaceSearchStats tiny;
+  index.Search(query, fixed, {}, &tiny);
+  PlaceSearchOptions grown = fixed;
+  grown.min_candidates_per_map = full.candidates / 2 / index.size();
+  ASSERT_GT(grown.min_candidates_per_map, 0u);
+  PlaceSearchStats half;
+  const std::vector<PlaceHypothesis> hypotheses = index.Search(query, grown, {}, &half);
+  EXPECT_GE(half.candidates, grown.min_candidates_per_map * index.size());
+  EXPECT_GT(half.features_used, tiny.features_used);
+  EXPECT_LE(half.candidates, full.candidates);
+  ASSERT_FALSE(hypotheses.empty());
+  EXPECT_EQ(hypotheses[0].map_id, 140u);
+}
+
 // `only` restricts the search to those maps: the others are never
 // returned, and their stored features are not counted as compared.
 TEST(PlaceIndexTest, OnlyTheNamedMapsAreSearched) {
