@@ -347,7 +347,9 @@ TEST(PlaceIndexTest, StatsCountTheWorkOfASearch) {
 
 // A candidate bound stops starting query features once that many stored
 // features were compared; the rarest features are read first, so the place
-// still wins when the bound is a fraction of the full search's work.
+// still wins when the bound is a fraction of the full search's work. The
+// bound grows with the collection: with min_candidates_per_map, a tiny
+// fixed bound still reads that many stored features per stored map.
 TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
   PlaceIndex index;
   AddStored(&index);
@@ -365,33 +367,21 @@ TEST(PlaceIndexTest, ACandidateBoundCutsTheWorkAndKeepsThePlace) {
   EXPECT_LT(cut.candidates, full.candidates);
   ASSERT_FALSE(hypotheses.empty());
   EXPECT_EQ(hypotheses[0].map_id, 140u);
-}
 
-// The bound grows with the collection: with min_candidates_per_map, a tiny
-// fixed bound still reads that many stored features per stored map.
-TEST(PlaceIndexTest, TheCandidateBoundGrowsWithTheCollection) {
-  PlaceIndex index;
-  AddStored(&index);
-  const PlaceFeatures query = Describe(MovedPoints(DemoMaps()[140], KnownMoves()[1]));
-  PlaceSearchOptions unbounded;
-  unbounded.max_candidates = 0;
-  PlaceSearchStats full;
-  index.Search(query, unbounded, {}, &full);
-  PlaceSearchOptions fixed;
-  fixed.max_candidates = 1;
-  fixed.min_candidates_per_map = 0;
-  PlaceSearchStats tiny;
-  index.Search(query, fixed, {}, &tiny);
-  PlaceSearchOptions grown = fixed;
-  grown.min_candidates_per_map = full.candidates / 2 / index.size();
+  PlaceSearchOptions tiny;
+  tiny.max_candidates = 1;
+  tiny.min_candidates_per_map = 0;
+  PlaceSearchStats one;
+  index.Search(query, tiny, {}, &one);
+  PlaceSearchOptions grown = tiny;
+  grown.min_candidates_per_map = full.candidates / 3 / index.size();
   ASSERT_GT(grown.min_candidates_per_map, 0u);
-  PlaceSearchStats half;
-  const std::vector<PlaceHypothesis> hypotheses = index.Search(query, grown, {}, &half);
-  EXPECT_GE(half.candidates, grown.min_candidates_per_map * index.size());
-  EXPECT_GT(half.features_used, tiny.features_used);
-  EXPECT_LE(half.candidates, full.candidates);
-  ASSERT_FALSE(hypotheses.empty());
-  EXPECT_EQ(hypotheses[0].map_id, 140u);
+  PlaceSearchStats per_map;
+  const std::vector<PlaceHypothesis> grown_hypotheses = index.Search(query, grown, {}, &per_map);
+  EXPECT_GE(per_map.candidates, grown.min_candidates_per_map * index.size());
+  EXPECT_GT(per_map.features_used, one.features_used);
+  ASSERT_FALSE(grown_hypotheses.empty());
+  EXPECT_EQ(grown_hypotheses[0].map_id, 140u);
 }
 
 // `only` restricts the search to those maps: the others are never
