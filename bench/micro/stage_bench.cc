@@ -1,26 +1,48 @@
 // lmd-microbench: CPU cost of each stage of one DetectChanges call as lmdd
 // runs it (core/localize: prepare the query, first-stage search, scan
 // matching of the chosen maps, the verdict, change masks) and of the whole
-// call, on the demo world's local maps. Google Benchmark; run
+// call, and of a prior query, on the demo world's local maps or, with
+// LMD_BENCH_LOG=FILE, on a CARMEN log's. Google Benchmark; run
 // `build/bench/lmd-microbench` (--benchmark_filter=Search picks a stage).
-// Each query is a demo map, localised against all other demo maps; one
+// Each query is a stored map, localised against the others with the maps
+// within 10 m of its travel left out (lmd-eval served's protocol); one
 // iteration runs every query once, and `per_query` is the mean time of one.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "core/io/carmen_reader.h"
 #include "core/localize/localizer.h"
 #include "core/localize/memory_collection.h"
+#include "core/localize/prior.h"
+#include "core/localmap/local_map_builder.h"
 #include "core/sim/simulate.h"
 
 namespace lmd {
 namespace {
 
-constexpr size_t kQueries = 40;  // every (maps / kQueries)-th demo map is a query
+constexpr size_t kQueries = 40;         // every (maps / kQueries)-th map is a query
+constexpr double kExcludedTravelM = 10.0;  // m of travel around a query whose maps are left out
 
-// The demo world prepared and stored once, as lmdd stores it.
+std::vector<LocalMap> BenchMaps() {
+  const char* log_path = std::getenv("LMD_BENCH_LOG");
+  if (log_path == nullptr) return SimulateLocalMaps(DefaultDemoOptions());
+  Result<LaserLog> log = ReadCarmenLog(log_path);
+  if (!log.ok()) {
+    std::fprintf(stderr, "lmd-microbench: %s\n", log.status().message().c_str());
+    std::exit(2);
+  }
+  return BuildLocalMaps(*log);
+}
+
+// The maps prepared and stored once, as lmdd stores them: anchored at their
+// true poses (as maps inserted with a pose_hint) with their trajectories.
 struct World {
   LocalizeOptions options;
   std::vector<LocalMap> maps;
@@ -29,16 +51,18 @@ struct World {
   std::vector<size_t> queries;
 
   World() {
-    maps = SimulateLocalMaps(DefaultDemoOptions());
+    maps = BenchMaps();
     for (size_t i = 0; i < maps.size(); ++i) {
       places.push_back(PreparePlace(maps[i], options));
-      (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1});
+      (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1}, maps[i].trajectory);
+      (void)collection.SetAnchor(i, maps[i].truth.global_frame);
     }
     for (size_t i = 0; i < maps.size(); i += std::max<size_t>(1, maps.size() / kQueries)) queries.push_back(i);
   }
-  // The query's own map is left out (lmdd's query is not yet stored).
   std::function<bool(uint64_t)> Excluding(size_t q) const {
-    return [q](uint64_t id) { return id == q; };
+    return [this, q](uint64_t id) {
+      return std::abs(maps[id].truth.travel_start - maps[q].truth.travel_start) <= kExcludedTravelM;
+    };
   }
 };
 
@@ -108,6 +132,49 @@ void BM_Localize(benchmark::State& state) { RunLocalize(state, false); }
 void BM_LocalizeWithChanges(benchmark::State& state) { RunLocalize(state, true); }
 BENCHMARK(BM_Localize)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LocalizeWithChanges)->Unit(benchmark::kMillisecond);
+
+// A prior query as lmd-eval served --mode prior sends it: the true pose off
+// by 1-3 m and 10-20 deg (seeded per query), radius 3.5 m, sigma 20 deg.
+void BM_LocalizeNear(benchmark::State& state) {
+  const World& w = TheWorld();
+  std::vector<LocalQuery> queries;
+  std::vector<Prior> priors;
+  for (size_t q : w.queries) {
+    queries.push_back(PrepareLocalQuery(w.maps[q], w.options, &w.places[q]));
+    std::mt19937_64 rng(q + 1);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const Pose2 truth = w.maps[q].truth.global_frame;
+    const double distance = 1.0 + 2.0 * u(rng), direction = 2 * M_PI * u(rng);
+    const double turn = (10.0 + 10.0 * u(rng)) * M_PI / 180.0 * (u(rng) < 0.5 ? -1.0 : 1.0);
+    Prior prior;
+    prior.pose = {truth.x + distance * std::cos(direction), truth.y + distance * std::sin(direction), truth.theta + turn};
+    prior.radius_m = 3.5;
+    prior.heading_sigma_rad = 20.0 * M_PI / 180.0;
+    priors.push_back(prior);
+  }
+  // right: the site pose within 0.2 m and 1 deg of the truth.
+  double search = 0, verify = 0, verdict = 0, matched = 0, right = 0, sure = 0, sure_wrong = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < queries.size(); ++i) {
+      const Localization l = LocalizeNear(queries[i], w.collection, w.options, priors[i], w.Excluding(w.queries[i]));
+      search += l.stats.search_ms, verify += l.stats.verify_ms, verdict += l.stats.verdict_ms;
+      matched += static_cast<double>(l.stats.maps_matched);
+      const Pose2 truth = w.maps[w.queries[i]].truth.global_frame;
+      const std::optional<Pose2>& p = l.verdict.collection_pose;
+      const bool is_right = p && std::hypot(p->x - truth.x, p->y - truth.y) <= 0.2 &&
+                            std::abs(std::remainder(p->theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
+      right += is_right, sure += l.verdict.sure, sure_wrong += l.verdict.sure && !is_right;
+    }
+  }
+  state.counters["per_query"] = PerQuery(queries.size());
+  const double n = static_cast<double>(queries.size());
+  for (const auto& [name, value] : {std::pair<const char*, double>{"search_ms", search}, {"verify_ms", verify},
+                                    {"verdict_ms", verdict}, {"maps_matched", matched}, {"right", right},
+                                    {"sure", sure}, {"sure_wrong", sure_wrong}}) {
+    state.counters[name] = benchmark::Counter(value / n, benchmark::Counter::kAvgIterations);
+  }
+}
+BENCHMARK(BM_LocalizeNear)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace lmd
