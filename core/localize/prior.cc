@@ -39,7 +39,7 @@ constexpr double kStageSlackM = 0.5;      // m, added to the scan match window a
 // implies in it. *match: the window that covers the prior.
 std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                                          const Prior& prior, const std::vector<MapSource::Anchored>& near,
-                                         ScanMatchOptions* match) {
+                                         size_t maps, ScanMatchOptions* match) {
   std::vector<Point2> path;
   for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
   if (path.empty()) path.push_back({prior.pose.x, prior.pose.y});
@@ -55,7 +55,7 @@ std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSourc
   std::sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
     return a.first != b.first ? a.first < b.first : near[a.second].map_id < near[b.second].map_id;
   });
-  if (order.size() > kBoundedPerMatched * options.prior_maps) order.resize(kBoundedPerMatched * options.prior_maps);
+  if (order.size() > kBoundedPerMatched * maps) order.resize(kBoundedPerMatched * maps);
   *match = options.match;
   match->window_m = prior.radius_m + options.prior_margin_m;
   double window_deg = match->window_deg;
@@ -86,7 +86,7 @@ std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSourc
   }
   std::stable_sort(bounded.begin(), bounded.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
   std::vector<Candidate> candidates;
-  for (size_t i = 0; i < bounded.size() && i < options.prior_maps; ++i) candidates.push_back(bounded[i].second);
+  for (size_t i = 0; i < bounded.size() && i < maps; ++i) candidates.push_back(bounded[i].second);
   match->window_deg = window_deg;
   return candidates;
 }
@@ -132,9 +132,14 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // first stage over the maps near the prior only: it says which of them
   // show what the query shows, and where, whatever the prior's error; its
   // hypotheses that put the query outside the prior are look-alikes
-  // elsewhere on the site (a map near the prior also shows places away from it).
+  // elsewhere on the site (a map near the prior also shows places away from
+  // it). A tight prior (a tracking robot's) skips the second set and has more
+  // of the nearest verified (LocalizeOptions::prior_stage_min_radius_m).
+  const bool tight = prior.radius_m <= options.prior_stage_min_radius_m &&
+                     prior.heading_sigma_rad <= options.match.window_deg * M_PI / 180;
   ScanMatchOptions near_match;
-  const std::vector<Candidate> nearest = NearestCandidates(query, source, options, prior, near, &near_match);
+  const std::vector<Candidate> nearest = NearestCandidates(
+      query, source, options, prior, near, tight ? options.prior_tight_maps : options.prior_maps, &near_match);
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
   std::vector<uint64_t> ids;
   for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
@@ -146,7 +151,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   stage.search.min_candidates_per_map = 0;  // the prior's maps are few whatever the collection holds
   stage.verify_maps = options.prior_maps;
   std::vector<PlaceHypothesis> hypotheses;
-  if (options.prior_first_stage && !ids.empty()) {
+  if (options.prior_first_stage && !tight && !ids.empty()) {
     const auto t = std::chrono::steady_clock::now();
     hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
     out.stats.search_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();

@@ -1,8 +1,10 @@
 // Prior queries: a robot that tracks its pose sends it, with its
-// uncertainty, in the collection's frame. The first stage runs over the
-// anchored maps that can overlap the prior region only, its best few are
-// verified, and hits that put the query outside the prior are dropped, so
-// that a look-alike elsewhere on the site cannot win.
+// uncertainty, in the collection's frame. The anchored maps whose robots
+// drove nearest are verified at the pose it implies and, unless the prior is
+// tight, the first stage runs over the anchored maps that can overlap the
+// prior region only and its best few are verified too; hits that put the
+// query outside the prior are dropped, so that a look-alike elsewhere on the
+// site cannot win.
 #pragma once
 
 #include <functional>

@@ -13,6 +13,7 @@
 #include "core/eval/ground_truth.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localize/memory_collection.h"
+#include "core/localize/prior.h"
 #include "core/localize/sequence.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
@@ -252,6 +253,43 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
     ++compared;
   }
   EXPECT_GE(compared, 10u);
+}
+
+// A tracking robot's tight prior is answered from the maps nearest it
+// without the first stage; a loose one runs the stage over the maps near the
+// prior. Both localise a moved copy of a stored map in the site frame.
+TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
+  MemoryCollection collection;
+  for (size_t i : EveryThirdMap()) {
+    ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
+    ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
+  }
+  size_t right_tight = 0, right_loose = 0, queries = 0;
+  for (size_t q = 7; q < DemoMaps().size(); q += 29) {
+    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalQuery query = PrepareLocalQuery(map, kOptions);
+    const Pose2 truth = map.truth.global_frame;
+    Prior tight;
+    tight.pose = {truth.x + 0.2, truth.y - 0.1, truth.theta + 1.5 * M_PI / 180};
+    tight.radius_m = 0.4;
+    tight.heading_sigma_rad = 3.0 * M_PI / 180;
+    Prior loose = tight;
+    loose.pose = {truth.x + 1.5, truth.y - 1.0, truth.theta + 12 * M_PI / 180};
+    loose.radius_m = 3.5;
+    loose.heading_sigma_rad = 20.0 * M_PI / 180;
+    const Localization a = LocalizeNear(query, collection, kOptions, tight);
+    const Localization b = LocalizeNear(query, collection, kOptions, loose);
+    ++queries;
+    EXPECT_EQ(a.stats.search.lookups, 0u) << q;
+    EXPECT_GT(b.stats.search.lookups, 0u) << q;
+    auto right = [&](const Localization& l) {
+      return l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
+             AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
+    };
+    right_tight += right(a), right_loose += right(b);
+  }
+  EXPECT_GE(right_tight, queries - 1) << "of " << queries;
+  EXPECT_GE(right_loose, queries - 1) << "of " << queries;
 }
 
 // Score = overlap - conflict - reverse conflict (weights 1); hits best first,
