@@ -4,6 +4,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include <Eigen/Core>
+
 #include "core/util/byte_codec.h"
 #include "core/util/gaussian_matrix.h"
 
@@ -179,6 +181,12 @@ PlaceFeatures DescribePlace(const std::vector<Point2>& points, double heading, c
   const std::vector<float>& projection = CachedProjection(options.projection_seed, shells);
   const int dims = shells * kSectors;
   const double r2 = radius * radius, shell_scale = shells / radius;
+  // One matrix-vector product per feature, vectorised by Eigen (a plain
+  // loop's float sum cannot be reordered by the compiler): most of
+  // describing a map at insert (perf, lmd-bench load --mode fleet).
+  const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> rows(
+      projection.data(), 4 * kGroups, dims);
+  Eigen::VectorXf dots(4 * kGroups);
   std::vector<float> hist(dims);
   out.features.reserve(interest.size());
   for (const Point2& ip : interest) {
@@ -197,11 +205,9 @@ PlaceFeatures DescribePlace(const std::vector<Point2>& points, double heading, c
     f.x = static_cast<float>(ip.x);
     f.y = static_cast<float>(ip.y);
     f.code = {0, 0};
+    dots.noalias() = rows * Eigen::Map<const Eigen::VectorXf>(hist.data(), dims);
     for (int b = 0; b < 4 * kGroups; ++b) {
-      const float* row = projection.data() + static_cast<size_t>(b) * dims;
-      float dot = 0.0f;
-      for (int i = 0; i < dims; ++i) dot += row[i] * hist[i];
-      if (dot > 0.0f) f.code[b / 64] |= uint64_t{1} << (b % 64);
+      if (dots[b] > 0.0f) f.code[b / 64] |= uint64_t{1} << (b % 64);
     }
     out.features.push_back(f);
   }
