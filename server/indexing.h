@@ -8,7 +8,6 @@
 // the store opens.
 #pragma once
 
-#include <optional>
 #include <string>
 
 #include "core/describe/describer.h"
@@ -31,8 +30,9 @@ struct IndexingConfig {
 // The product's indexing, with or without inner words (ServerConfig::inner_words).
 IndexingConfig ProductIndexing(bool inner_words);
 
-// The planned frame and descriptor of `map` (in its own frame).
-Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config);
+// The planned frame and descriptor of `map` (in its own frame). `place`:
+// the same map's PreparePlace, if computed already (its compass is reused).
+Lmd DescribeForIndex(const LocalMap& map, const IndexingConfig& config, const PreparedPlace* place = nullptr);
 
 // Everything lmdd computes from a map's content: the default method's
 // preparation (scan-matching grids, place features) and the paper's

@@ -82,7 +82,7 @@ std::shared_ptr<const DescribedMap> LmdServiceImpl::Describe(const v1::LocalMap&
   std::shared_ptr<const DescribedMap> described;
   if (cached) {  // queried a moment ago, now stored: the descriptor is what is missing
     DescribedMap completed = *cached;
-    completed.lmd = DescribeForIndex(MethodView(FromProto(map)), store_->indexing());
+    completed.lmd = DescribeForIndex(MethodView(FromProto(map)), store_->indexing(), &completed.place);
     described = std::make_shared<const DescribedMap>(std::move(completed));
   } else {
     described = std::make_shared<const DescribedMap>(DescribeMap(FromProto(map), store_->indexing(), with_lmd));

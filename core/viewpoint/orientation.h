@@ -13,6 +13,9 @@ struct OrientationOptions {
   double bin_m = 0.1;            // m, projection histogram bin (paper: 0.1)
   double coarse_step_deg = 1.0;  // deg, first sweep over [0, 90)
   double fine_step_deg = 0.1;    // deg, refinement around the best coarse angle
+  bool operator==(const OrientationOptions& o) const {
+    return bin_m == o.bin_m && coarse_step_deg == o.coarse_step_deg && fine_step_deg == o.fine_step_deg;
+  }
 };
 
 // Angle theta in [0, pi/2) minimising H(x') + H(y') where (x', y') =

@@ -24,7 +24,8 @@ namespace {
 // Both planners' frames, or (with_rooms false) CoG only: CoR's room search
 // and the free space it needs cost most of planning, and lmdd's CoG store
 // never reads them. The grid then holds occupied cells only.
-ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool with_rooms) {
+ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool with_rooms,
+                   std::optional<double> known_heading) {
   ViewpointPlan plan;
   if (map.points.empty()) {
     plan.grid = BuildOccupancyGrid(map, 0.0, options.grid);
@@ -32,7 +33,7 @@ ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool wi
     plan.room_peak.assign(plan.grid.cells().size(), 0);
     return plan;
   }
-  const double heading = EstimateDominantOrientation(map.points, options.orientation);
+  const double heading = known_heading ? *known_heading : EstimateDominantOrientation(map.points, options.orientation);
   GridOptions grid_options = options.grid;
   grid_options.free_space = grid_options.free_space && with_rooms;  // CoG reads only occupied cells
   plan.grid = BuildOccupancyGrid(map, heading, grid_options);
@@ -84,11 +85,11 @@ ViewpointPlan Plan(const LocalMap& map, const ViewpointOptions& options, bool wi
 }  // namespace
 
 ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions& options) {
-  return Plan(map, options, true);
+  return Plan(map, options, true, std::nullopt);
 }
 
-Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options) {
-  return Plan(map, options, options.planner == Planner::kCoR).frame;
+Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options, std::optional<double> known_heading) {
+  return Plan(map, options, options.planner == Planner::kCoR, known_heading).frame;
 }
 
 }  // namespace lmd

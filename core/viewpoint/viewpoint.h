@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/grid/occupancy_grid.h"
@@ -55,8 +56,10 @@ struct ViewpointPlan {
 ViewpointPlan PlanViewpointDetailed(const LocalMap& map, const ViewpointOptions& options = {});
 
 // PlanViewpointDetailed(map, options).frame (without the room search when
-// the planner is CoG).
-Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options = {});
+// the planner is CoG). `known_heading`: the map's compass heading with
+// options.orientation, where the caller has it already.
+Frame PlanViewpoint(const LocalMap& map, const ViewpointOptions& options = {},
+                    std::optional<double> known_heading = std::nullopt);
 
 // Own-frame point -> coordinates in `frame` (R(-heading) (p - origin)), and back.
 Point2 ToFrame(const Frame& frame, const Point2& own);
