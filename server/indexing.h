@@ -8,6 +8,7 @@
 // the store opens.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "core/describe/describer.h"

@@ -31,6 +31,7 @@
 #include "client/lmd_client.h"
 #include "core/util/progress_bar.h"
 #include "core/localmap/pose_ops.h"
+#include "core/sim/pose_noise.h"
 #include "proto/convert.h"
 
 namespace lmd::eval {
@@ -62,13 +63,9 @@ struct ServedOptions {
   // Maps inserted with their pose in the log's frame as pose_hint (a site
   // map built by the robots' own SLAM): prior and sequence queries need it.
   bool anchored = false;
-  // Priors off by a uniform distance in a uniform direction and a uniform
-  // turn either way, sent with this radius and heading sigma. --mode prior:
-  // 1-3 m and 10-20 deg (a robot that knows roughly where it is); --mode
-  // tracking: 0-0.3 m and 0-2 deg (one that tracks its pose, as lmd-bench
-  // load --mode fleet's robots do after a fix).
-  double prior_off_m[2] = {1.0, 3.0};
-  double prior_turn_deg[2] = {10.0, 20.0};
+  // Priors: the true pose with this noise, sent with this radius and heading
+  // sigma (--mode tracking: kTrackingPrior, 0.4 m, 3 deg).
+  PoseNoise prior_noise = kRoughPrior;
   double prior_radius_m = 3.5;
   double prior_sigma_rad = 20.0 * M_PI / 180.0;
   // Sequences: this many maps in all, each `sequence_spacing` maps (1 m
@@ -159,13 +156,8 @@ void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& optio
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const Pose2 truth = d.maps[q.map].truth.global_frame;
   if (options.mode == QueryMode::kPrior) {
-    const double distance = options.prior_off_m[0] + (options.prior_off_m[1] - options.prior_off_m[0]) * u(rng);
-    const double direction = 2 * M_PI * u(rng);
-    const double turn = (options.prior_turn_deg[0] + (options.prior_turn_deg[1] - options.prior_turn_deg[0]) * u(rng)) *
-                        M_PI / 180.0 * (u(rng) < 0.5 ? -1.0 : 1.0);
     v1::Prior* prior = request->mutable_prior();
-    *prior->mutable_pose() = ToProto(Pose2{truth.x + distance * std::cos(direction),
-                                           truth.y + distance * std::sin(direction), truth.theta + turn});
+    *prior->mutable_pose() = ToProto(PerturbedPose(truth, options.prior_noise, rng));
     prior->set_radius_m(options.prior_radius_m);
     prior->set_heading_sigma_rad(options.prior_sigma_rad);
   }
@@ -369,8 +361,7 @@ int RunServed(int argc, char** argv) {
     options.mode = QueryMode::kPrior;
   } else if (mode == "tracking") {
     options.mode = QueryMode::kPrior;
-    options.prior_off_m[0] = 0.0, options.prior_off_m[1] = 0.3;
-    options.prior_turn_deg[0] = 0.0, options.prior_turn_deg[1] = 2.0;
+    options.prior_noise = kTrackingPrior;
     options.prior_radius_m = 0.4;
     options.prior_sigma_rad = 3.0 * M_PI / 180.0;
   } else if (mode == "sequence") {

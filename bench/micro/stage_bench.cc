@@ -1,7 +1,7 @@
 // lmd-microbench: CPU cost of each stage of one DetectChanges call as lmdd
 // runs it (core/localize: prepare the query, first-stage search, scan
 // matching of the chosen maps, the verdict, change masks) and of the whole
-// call, and of a prior query, on the demo world's local maps or, with
+// call, and of prior queries, on the demo world's local maps or, with
 // LMD_BENCH_LOG=FILE, on a CARMEN log's. Google Benchmark; run
 // `build/bench/lmd-microbench` (--benchmark_filter=Search picks a stage).
 // Each query is a stored map, localised against the others with the maps
@@ -22,6 +22,7 @@
 #include "core/localize/memory_collection.h"
 #include "core/localize/prior.h"
 #include "core/localmap/local_map_builder.h"
+#include "core/sim/pose_noise.h"
 #include "core/sim/simulate.h"
 
 namespace lmd {
@@ -57,7 +58,9 @@ struct World {
       (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1}, maps[i].trajectory);
       (void)collection.SetAnchor(i, maps[i].truth.global_frame);
     }
-    for (size_t i = 0; i < maps.size(); i += std::max<size_t>(1, maps.size() / kQueries)) queries.push_back(i);
+    for (size_t i = 0; i < maps.size(); i += std::max<size_t>(1, maps.size() / kQueries)) {
+      if (!maps[i].points.empty()) queries.push_back(i);  // as lmd-eval served, which never asks an empty map
+    }
   }
   std::function<bool(uint64_t)> Excluding(size_t q) const {
     return [this, q](uint64_t id) {
@@ -133,23 +136,20 @@ void BM_LocalizeWithChanges(benchmark::State& state) { RunLocalize(state, true);
 BENCHMARK(BM_Localize)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LocalizeWithChanges)->Unit(benchmark::kMillisecond);
 
-// A prior query as lmd-eval served --mode prior sends it: the true pose off
-// by 1-3 m and 10-20 deg (seeded per query), radius 3.5 m, sigma 20 deg.
-void BM_LocalizeNear(benchmark::State& state) {
+// Prior queries as lmd-eval served sends them: --mode prior (the true pose
+// off by 1-3 m and 10-20 deg, radius 3.5 m, sigma 20 deg) and --mode
+// tracking (0-0.3 m, 0-2 deg; 0.4 m, 3 deg: a tight prior), seeded per query.
+void RunLocalizeNear(benchmark::State& state, const PoseNoise& noise, double radius_m, double sigma_deg) {
   const World& w = TheWorld();
   std::vector<LocalQuery> queries;
   std::vector<Prior> priors;
   for (size_t q : w.queries) {
     queries.push_back(PrepareLocalQuery(w.maps[q], w.options, &w.places[q]));
     std::mt19937_64 rng(q + 1);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    const Pose2 truth = w.maps[q].truth.global_frame;
-    const double distance = 1.0 + 2.0 * u(rng), direction = 2 * M_PI * u(rng);
-    const double turn = (10.0 + 10.0 * u(rng)) * M_PI / 180.0 * (u(rng) < 0.5 ? -1.0 : 1.0);
     Prior prior;
-    prior.pose = {truth.x + distance * std::cos(direction), truth.y + distance * std::sin(direction), truth.theta + turn};
-    prior.radius_m = 3.5;
-    prior.heading_sigma_rad = 20.0 * M_PI / 180.0;
+    prior.pose = PerturbedPose(w.maps[q].truth.global_frame, noise, rng);
+    prior.radius_m = radius_m;
+    prior.heading_sigma_rad = sigma_deg * M_PI / 180.0;
     priors.push_back(prior);
   }
   // right: the site pose within 0.2 m and 1 deg of the truth.
@@ -174,7 +174,10 @@ void BM_LocalizeNear(benchmark::State& state) {
     state.counters[name] = benchmark::Counter(value / n, benchmark::Counter::kAvgIterations);
   }
 }
+void BM_LocalizeNear(benchmark::State& state) { RunLocalizeNear(state, kRoughPrior, 3.5, 20.0); }
+void BM_LocalizeNearTracking(benchmark::State& state) { RunLocalizeNear(state, kTrackingPrior, 0.4, 3.0); }
 BENCHMARK(BM_LocalizeNear)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LocalizeNearTracking)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace lmd

@@ -99,20 +99,24 @@ struct LocalizeOptions {
   size_t prior_maps = 4;
   double prior_margin_m = 1.0;
   bool prior_first_stage = true;
-  // A prior this tight (radius at most this, heading sigma at most
-  // match.window_deg), as a tracking robot sends, skips the first stage and
-  // has the prior_tight_maps nearest maps verified instead: the radius is
-  // half the first stage's 1 m vote cell, so its hypotheses cannot say more
-  // about where the query is than the prior does, and the maps whose robots
-  // drove nearest are the ones that show the query's view. Measured in
-  // process on the tuning logs (aces, fr079, intel, orebro; every other map
-  // queried, 10 m neighbours excluded, priors off by <= 0.3 m and <= 2 deg,
-  // radius 0.4 m, sigma 3 deg): place@1 .974 / .986 / .996 / 1.000 -> .991 /
-  // .990 / .992 / .982, sure and wrong 11 -> 7, CPU per query 6.2 / 11.8 /
-  // 6.7 / 4.9 -> 3.5 / 7.3 / 2.9 / 2.7 ms. Skipping the stage with 4 maps
-  // verified: .974 / .967 / .984 / 1.000 at 2.6 / 4.1 / 2.4 / 1.7 ms.
-  double prior_stage_min_radius_m = 0.5;
-  size_t prior_tight_maps = 8;
+  // A tight prior (radius and heading sigma at most these), as a tracking
+  // robot sends after a fix, skips the first stage (with prior_first_stage
+  // on) and has the tight_prior_maps best-bounded of the 4 x as many maps
+  // nearest it verified instead. Why: the radius is half the first stage's
+  // 1 m vote cell, the sigma the scan matcher's own +-3 deg window, so the
+  // stage's hypotheses add little about where the query is, and the maps
+  // whose robots drove nearest show the query's view. It trades a little
+  // recall for CPU and fewer sure and wrong answers. Measured in process on
+  // the tuning logs (aces, fr079, intel, orebro; every other map queried, 10
+  // m neighbours excluded, priors off by <= 0.3 m and <= 2 deg, radius 0.4
+  // m, sigma 3 deg), stage always -> this: place@1 .974 / .986 / .996 /
+  // 1.000 -> .991 / .990 / .992 / .982, sure and wrong 11 -> 7, CPU per
+  // query 6.2 / 11.8 / 6.7 / 4.9 -> 3.5 / 7.3 / 2.9 / 2.7 ms. Skipping the
+  // stage with 4 maps verified: .974 / .967 / .984 / 1.000 at 2.6 / 4.1 /
+  // 2.4 / 1.7 ms. Served: docs/results.md, "Tracking priors".
+  double tight_prior_radius_m = 0.5;
+  double tight_prior_sigma_deg = 3.0;
+  size_t tight_prior_maps = 8;
   // Sequence queries (sequence.h): hypotheses of the newest map checked
   // against the earlier maps; odometry drift allowed per metre travelled
   // (position, m/m; heading, rad/m) on top of the scan matching window.

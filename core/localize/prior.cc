@@ -134,39 +134,38 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // hypotheses that put the query outside the prior are look-alikes
   // elsewhere on the site (a map near the prior also shows places away from
   // it). A tight prior (a tracking robot's) skips the second set and has more
-  // of the nearest verified (LocalizeOptions::prior_stage_min_radius_m).
-  const bool tight = prior.radius_m <= options.prior_stage_min_radius_m &&
-                     prior.heading_sigma_rad <= options.match.window_deg * M_PI / 180;
+  // of the nearest verified (LocalizeOptions::tight_prior_radius_m).
+  const bool tight = options.prior_first_stage && prior.radius_m <= options.tight_prior_radius_m &&
+                     prior.heading_sigma_rad <= options.tight_prior_sigma_deg * M_PI / 180;
   ScanMatchOptions near_match;
   const std::vector<Candidate> nearest = NearestCandidates(
-      query, source, options, prior, near, tight ? options.prior_tight_maps : options.prior_maps, &near_match);
+      query, source, options, prior, near, tight ? options.tight_prior_maps : options.prior_maps, &near_match);
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
-  std::vector<uint64_t> ids;
-  for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
-  LocalizeOptions stage = options;
-  stage.search.only = &ids;
-  stage.search.max_hypotheses = kPriorHypotheses;
-  stage.search.hypotheses_per_map = kPriorPeaksPerMap;
-  stage.search.max_candidates = kPriorStageReads;
-  stage.search.min_candidates_per_map = 0;  // the prior's maps are few whatever the collection holds
-  stage.verify_maps = options.prior_maps;
-  std::vector<PlaceHypothesis> hypotheses;
-  if (options.prior_first_stage && !tight && !ids.empty()) {
+  if (options.prior_first_stage && !tight && !near.empty()) {
+    std::vector<uint64_t> ids;
+    for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
+    LocalizeOptions stage = options;
+    stage.search.only = &ids;
+    stage.search.max_hypotheses = kPriorHypotheses;
+    stage.search.hypotheses_per_map = kPriorPeaksPerMap;
+    stage.search.max_candidates = kPriorStageReads;
+    stage.search.min_candidates_per_map = 0;  // the prior's maps are few whatever the collection holds
+    stage.verify_maps = options.prior_maps;
     const auto t = std::chrono::steady_clock::now();
-    hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
+    std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
     out.stats.search_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-  }
-  hypotheses.erase(std::remove_if(hypotheses.begin(), hypotheses.end(),
-                                  [&](const PlaceHypothesis& h) {
-                                    return !inside(h.map_id, HypothesisPose(h, query.map->heading));
-                                  }),
-                   hypotheses.end());
-  out.stats.hypotheses = hypotheses.size();
-  ScanMatchOptions stage_match = options.match;
-  stage_match.window_m += kStageSlackM;  // the first stage's translation is good to its 1 m vote cell
-  for (LocalizedHit& hit : VerifyCandidates(query, source, ChooseCandidates(query, source, hypotheses, stage),
-                                            stage, stage_match, stop, &out.stats)) {
-    hits.push_back(std::move(hit));
+    hypotheses.erase(std::remove_if(hypotheses.begin(), hypotheses.end(),
+                                    [&](const PlaceHypothesis& h) {
+                                      return !inside(h.map_id, HypothesisPose(h, query.map->heading));
+                                    }),
+                     hypotheses.end());
+    out.stats.hypotheses = hypotheses.size();
+    ScanMatchOptions stage_match = options.match;
+    stage_match.window_m += kStageSlackM;  // the first stage's translation is good to its 1 m vote cell
+    for (LocalizedHit& hit : VerifyCandidates(query, source, ChooseCandidates(query, source, hypotheses, stage),
+                                              stage, stage_match, stop, &out.stats)) {
+      hits.push_back(std::move(hit));
+    }
   }
   // Each map once, at its better fit; none that the match moved outside the prior.
   SortHits(&hits);

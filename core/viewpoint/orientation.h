@@ -13,6 +13,7 @@ struct OrientationOptions {
   double bin_m = 0.1;            // m, projection histogram bin (paper: 0.1)
   double coarse_step_deg = 1.0;  // deg, first sweep over [0, 90)
   double fine_step_deg = 0.1;    // deg, refinement around the best coarse angle
+  // Every field (a new one must join): whether two compasses are one.
   bool operator==(const OrientationOptions& o) const {
     return bin_m == o.bin_m && coarse_step_deg == o.coarse_step_deg && fine_step_deg == o.fine_step_deg;
   }

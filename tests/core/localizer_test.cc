@@ -255,16 +255,19 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   EXPECT_GE(compared, 10u);
 }
 
-// A tracking robot's tight prior is answered from the maps nearest it
-// without the first stage; a loose one runs the stage over the maps near the
-// prior. Both localise a moved copy of a stored map in the site frame.
+// A tracking robot's tight prior (radius and heading sigma both small) is
+// answered from more of the maps nearest it without the first stage; a
+// loose one, in radius or in heading, runs the stage over the maps near the
+// prior. Each query is a moved copy of a demo map (every third one is
+// stored, so it or its route neighbours show the place), localised in the
+// site frame.
 TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
   MemoryCollection collection;
   for (size_t i : EveryThirdMap()) {
     ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
     ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
   }
-  size_t right_tight = 0, right_loose = 0, queries = 0;
+  size_t right_tight = 0, right_loose = 0, queries = 0, more_matched = 0;
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
     const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
@@ -273,21 +276,29 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
     tight.pose = {truth.x + 0.2, truth.y - 0.1, truth.theta + 1.5 * M_PI / 180};
     tight.radius_m = 0.4;
     tight.heading_sigma_rad = 3.0 * M_PI / 180;
-    Prior loose = tight;
+    Prior loose_heading = tight;
+    loose_heading.heading_sigma_rad = 20.0 * M_PI / 180;
+    Prior loose;
     loose.pose = {truth.x + 1.5, truth.y - 1.0, truth.theta + 12 * M_PI / 180};
     loose.radius_m = 3.5;
     loose.heading_sigma_rad = 20.0 * M_PI / 180;
     const Localization a = LocalizeNear(query, collection, kOptions, tight);
     const Localization b = LocalizeNear(query, collection, kOptions, loose);
+    const Localization c = LocalizeNear(query, collection, kOptions, loose_heading);
     ++queries;
     EXPECT_EQ(a.stats.search.lookups, 0u) << q;
     EXPECT_GT(b.stats.search.lookups, 0u) << q;
+    EXPECT_GT(c.stats.search.lookups, 0u) << q;
+    EXPECT_LE(a.stats.maps_matched, kOptions.tight_prior_maps) << q;
+    more_matched += a.stats.maps_matched > kOptions.prior_maps;
     auto right = [&](const Localization& l) {
       return l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
              AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
     };
     right_tight += right(a), right_loose += right(b);
   }
+  // Where more maps lie near the prior than prior_maps, more are verified.
+  EXPECT_GE(more_matched, queries / 2) << "of " << queries;
   EXPECT_GE(right_tight, queries - 1) << "of " << queries;
   EXPECT_GE(right_loose, queries - 1) << "of " << queries;
 }
