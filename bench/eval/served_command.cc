@@ -332,15 +332,6 @@ int RunServed(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
-  std::vector<std::string> logs = args.GetAll("log");
-  if (logs.empty()) {
-    const std::string dir = DefaultDataDir();
-    if (dir.empty()) {
-      std::fprintf(stderr, "lmd-eval served: no --log given and no ../shared/data folder found (set LMD_DATA_DIR)\n");
-      return 2;
-    }
-    logs = LogsIn(dir);
-  }
   ServedOptions options;
   DatasetOptions dataset;
   dataset.every_map = true;
@@ -369,6 +360,16 @@ int RunServed(int argc, char** argv) {
   } else if (mode != "global") {
     std::fprintf(stderr, "lmd-eval served: --mode is global, prior, tracking or sequence, not '%s'\n", mode.c_str());
     return 2;
+  }
+  // The options are checked first: a mistyped one is refused before any log is looked for.
+  std::vector<std::string> logs = args.GetAll("log");
+  if (logs.empty()) {
+    const std::string dir = DefaultDataDir();
+    if (dir.empty()) {
+      std::fprintf(stderr, "lmd-eval served: no --log given and no ../shared/data folder found (set LMD_DATA_DIR)\n");
+      return 2;
+    }
+    logs = LogsIn(dir);
   }
   options.anchored = args.Has("anchor") || options.mode != QueryMode::kGlobal;
   options.collection_prefix = "served-" + mode + "-";
