@@ -35,6 +35,18 @@ std::vector<std::string> LogsIn(const std::string& dir) {
   return logs;
 }
 
+std::vector<std::string> LogsToMeasure(std::vector<std::string> named, std::string* error) {
+  if (!named.empty()) return named;
+  const std::string dir = DefaultDataDir();
+  if (dir.empty()) {
+    *error = "no --log given and no ../shared/data folder found (set LMD_DATA_DIR)";
+    return {};
+  }
+  std::vector<std::string> logs = LogsIn(dir);
+  if (logs.empty()) *error = "no *.log.gz in " + dir;
+  return logs;
+}
+
 bool IsBagPath(const std::string& path) {
   const std::string ext = fs::path(path).extension().string();
   return ext == ".mcap" || ext == ".bag" || ext == ".db3" || fs::is_directory(path);

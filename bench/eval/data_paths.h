@@ -15,6 +15,11 @@ std::string DefaultDataDir();
 // Every *.log.gz in `dir`, sorted by name.
 std::vector<std::string> LogsIn(const std::string& dir);
 
+// What a command measures: the logs it was given (--log) or, with none,
+// every log of DefaultDataDir(). Empty, with `error` saying why, if there
+// are none.
+std::vector<std::string> LogsToMeasure(std::vector<std::string> named, std::string* error);
+
 // "aces" for ".../aces.log.gz" (directory and .gz/.log extensions stripped).
 std::string DatasetName(const std::string& path);
 

@@ -568,17 +568,10 @@ int RunRetrieval(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval retrieval: %s\n", args.error().c_str());
     return 2;
   }
-  std::vector<std::string> logs = args.GetAll("log");
+  std::string no_logs;
+  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
   if (logs.empty()) {
-    const std::string dir = DefaultDataDir();
-    if (dir.empty()) {
-      std::fprintf(stderr, "lmd-eval retrieval: no --log given and no ../shared/data folder found (set LMD_DATA_DIR)\n");
-      return 2;
-    }
-    logs = LogsIn(dir);
-  }
-  if (logs.empty()) {
-    std::fprintf(stderr, "lmd-eval retrieval: no logs\n");
+    std::fprintf(stderr, "lmd-eval retrieval: %s\n", no_logs.c_str());
     return 2;
   }
   const std::string out_dir = args.Get("out", "out/retrieval");

@@ -362,14 +362,11 @@ int RunServed(int argc, char** argv) {
     return 2;
   }
   // The options are checked first: a mistyped one is refused before any log is looked for.
-  std::vector<std::string> logs = args.GetAll("log");
+  std::string no_logs;
+  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
   if (logs.empty()) {
-    const std::string dir = DefaultDataDir();
-    if (dir.empty()) {
-      std::fprintf(stderr, "lmd-eval served: no --log given and no ../shared/data folder found (set LMD_DATA_DIR)\n");
-      return 2;
-    }
-    logs = LogsIn(dir);
+    std::fprintf(stderr, "lmd-eval served: %s\n", no_logs.c_str());
+    return 2;
   }
   options.anchored = args.Has("anchor") || options.mode != QueryMode::kGlobal;
   options.collection_prefix = "served-" + mode + "-";
