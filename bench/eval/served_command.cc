@@ -63,11 +63,8 @@ struct ServedOptions {
   // Maps inserted with their pose in the log's frame as pose_hint (a site
   // map built by the robots' own SLAM): prior and sequence queries need it.
   bool anchored = false;
-  // Priors: the true pose with this noise, sent with this radius and heading
-  // sigma (--mode tracking: kTrackingPrior, 0.4 m, 3 deg).
+  // Priors: the true pose with this noise (--mode tracking: kTrackingPrior).
   PoseNoise prior_noise = kRoughPrior;
-  double prior_radius_m = 3.5;
-  double prior_sigma_rad = 20.0 * M_PI / 180.0;
   // Sequences: this many maps in all, each `sequence_spacing` maps (1 m
   // each) before the next; odometry to them off by 2 % of the distance and
   // up to 1 deg per metre.
@@ -158,8 +155,8 @@ void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& optio
   if (options.mode == QueryMode::kPrior) {
     v1::Prior* prior = request->mutable_prior();
     *prior->mutable_pose() = ToProto(PerturbedPose(truth, options.prior_noise, rng));
-    prior->set_radius_m(options.prior_radius_m);
-    prior->set_heading_sigma_rad(options.prior_sigma_rad);
+    prior->set_radius_m(options.prior_noise.radius_m);
+    prior->set_heading_sigma_rad(options.prior_noise.sigma_deg * M_PI / 180.0);
   }
   if (options.mode == QueryMode::kSequence) {
     for (size_t k = 1; k < options.sequence_maps; ++k) {
@@ -353,8 +350,6 @@ int RunServed(int argc, char** argv) {
   } else if (mode == "tracking") {
     options.mode = QueryMode::kPrior;
     options.prior_noise = kTrackingPrior;
-    options.prior_radius_m = 0.4;
-    options.prior_sigma_rad = 3.0 * M_PI / 180.0;
   } else if (mode == "sequence") {
     options.mode = QueryMode::kSequence;
   } else if (mode != "global") {

@@ -139,7 +139,7 @@ BENCHMARK(BM_LocalizeWithChanges)->Unit(benchmark::kMillisecond);
 // Prior queries as lmd-eval served sends them: --mode prior (the true pose
 // off by 1-3 m and 10-20 deg, radius 3.5 m, sigma 20 deg) and --mode
 // tracking (0-0.3 m, 0-2 deg; 0.4 m, 3 deg: a tight prior), seeded per query.
-void RunLocalizeNear(benchmark::State& state, const PoseNoise& noise, double radius_m, double sigma_deg) {
+void RunLocalizeNear(benchmark::State& state, const PoseNoise& noise) {
   const World& w = TheWorld();
   std::vector<LocalQuery> queries;
   std::vector<Prior> priors;
@@ -148,8 +148,8 @@ void RunLocalizeNear(benchmark::State& state, const PoseNoise& noise, double rad
     std::mt19937_64 rng(q + 1);
     Prior prior;
     prior.pose = PerturbedPose(w.maps[q].truth.global_frame, noise, rng);
-    prior.radius_m = radius_m;
-    prior.heading_sigma_rad = sigma_deg * M_PI / 180.0;
+    prior.radius_m = noise.radius_m;
+    prior.heading_sigma_rad = noise.sigma_deg * M_PI / 180.0;
     priors.push_back(prior);
   }
   // right: the site pose within 0.2 m and 1 deg of the truth.
@@ -174,8 +174,8 @@ void RunLocalizeNear(benchmark::State& state, const PoseNoise& noise, double rad
     state.counters[name] = benchmark::Counter(value / n, benchmark::Counter::kAvgIterations);
   }
 }
-void BM_LocalizeNear(benchmark::State& state) { RunLocalizeNear(state, kRoughPrior, 3.5, 20.0); }
-void BM_LocalizeNearTracking(benchmark::State& state) { RunLocalizeNear(state, kTrackingPrior, 0.4, 3.0); }
+void BM_LocalizeNear(benchmark::State& state) { RunLocalizeNear(state, kRoughPrior); }
+void BM_LocalizeNearTracking(benchmark::State& state) { RunLocalizeNear(state, kTrackingPrior); }
 BENCHMARK(BM_LocalizeNear)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LocalizeNearTracking)->Unit(benchmark::kMillisecond);
 
