@@ -232,7 +232,18 @@ for k in $(seq 10); do
   "$bench_bin" writes --verify --servers "$servers,$(node_addr 4)" --collection "kill$k" --acked "$work/kill$k.acked" \
     --copies 3 >"$work/kill$k.verify4" || fail "kill$k after rebalancing: $(cat "$work/kill$k.verify4")"
 done
-log "n4 took $settled of the 10 kill collections' copies (rebalancing); each settled on 3 in-sync copies holding every acknowledged map"
+# Each copy n4 replaced is deleted by the node it left (its store lists it no more).
+held=0
+for _ in $(seq 100); do
+  held=0
+  for n in 1 2 3 4; do
+    held=$(( held + $("$lmdctl_bin" --server "$(node_addr "$n")" collections | grep -c '^kill' || true) ))
+  done
+  [ "$held" -eq 30 ] && break
+  sleep 0.2
+done
+[ "$held" -eq 30 ] || fail "after rebalancing the 4 nodes' stores hold $held copies of the 10 kill collections, not 30"
+log "n4 took $settled of the 10 kill collections' copies (rebalancing); each settled on 3 in-sync copies holding every acknowledged map; the copies n4 replaced were deleted (30 held in all)"
 
 # --- 6. TLS and tokens between nodes ---------------------------------------------------
 bash "$root/deploy/make-dev-secrets.sh" "$work/secrets" >/dev/null

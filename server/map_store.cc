@@ -321,6 +321,13 @@ CollectionState* MapStore::FindCollection(const std::string& collection) const {
   return it == collections_.end() ? nullptr : it->second.get();
 }
 
+internal::CollectionRecord MapStore::NewRecord(const std::string& collection) const {
+  internal::CollectionRecord record;
+  const auto dropped = dropped_next_index_id_.find(collection);
+  if (dropped != dropped_next_index_id_.end()) record.set_next_index_id(dropped->second);
+  return record;
+}
+
 Result<internal::IndexedMap> MapStore::ReadIndexed(const std::string& key) const {
   std::string value;
   const rocksdb::Status read = db_->Get({}, descriptors_cf_, key, &value);
@@ -446,7 +453,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
     if (record_it == records.end()) {
       const CollectionState* state = FindCollection(collection);
       if (state == nullptr) ++new_collections;
-      record_it = records.emplace(collection, state ? state->record : internal::CollectionRecord()).first;
+      record_it = records.emplace(collection, state ? state->record : NewRecord(collection)).first;
     }
     internal::CollectionRecord& record = record_it->second;
     if (meta->map_id().empty()) {
@@ -668,6 +675,39 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   return Status::Ok();
 }
 
+Status MapStore::DropCollection(const std::string& collection) {
+  std::lock_guard<std::mutex> lock(write_mutex_);
+  CollectionState* state = FindCollection(collection);
+  if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
+  rocksdb::WriteBatch batch;
+  // "<collection>/" up to "<collection>0": every key of the collection ('0'
+  // follows '/'; names hold no '/').
+  for (auto* cf : {maps_cf_, metadata_cf_, descriptors_cf_, postings_cf_, requests_cf_}) {
+    batch.DeleteRange(cf, collection + "/", collection + "0");
+  }
+  batch.Delete(collections_cf_, collection);
+  rocksdb::WriteOptions write_options;
+  write_options.sync = sync_writes_;
+  Status status = FromRocks(db_->Write(write_options, &batch), "dropping collection " + collection);
+  if (!status.ok()) return status;
+  dropped_next_index_id_[collection] = state->record.next_index_id();
+  {
+    std::unique_lock<std::shared_mutex> collections_lock(collections_mutex_);
+    auto it = collections_.find(collection);
+    dropped_.push_back(std::move(it->second));
+    collections_.erase(it);
+  }
+  std::unique_lock<std::shared_mutex> index_lock(state->index_mutex);
+  for (const auto& [id, map_id] : state->map_ids) {
+    state->index.Remove(id);
+    state->places.Remove(id);
+    state->anchors.Remove(id);
+  }
+  state->routes.clear();
+  state->map_ids.clear();
+  return Status::Ok();
+}
+
 ReplicationMark MapStore::MarkOf(const std::string& collection) const {
   std::shared_lock<std::shared_mutex> lock(collections_mutex_);
   const CollectionState* state = FindCollection(collection);
@@ -679,7 +719,7 @@ Status MapStore::SetMark(const std::string& collection, const ReplicationMark& m
                          const std::vector<KeptRequest>* requests) {
   std::lock_guard<std::mutex> lock(write_mutex_);
   CollectionState* state = FindCollection(collection);
-  internal::CollectionRecord record = state ? state->record : internal::CollectionRecord();
+  internal::CollectionRecord record = state ? state->record : NewRecord(collection);
   record.set_replication_epoch(mark.epoch);
   record.set_replication_seq(mark.seq);
   rocksdb::WriteBatch batch;

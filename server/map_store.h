@@ -164,6 +164,12 @@ class MapStore {
   // Deletes one map with its descriptor and postings. NotFound if absent.
   // With `mark`, the collection's replication mark is set in the same write.
   Status DeleteMap(const std::string& collection, const std::string& map_id, const ReplicationMark* mark = nullptr);
+  // Deletes the collection whole (maps, descriptors, postings, kept request
+  // ids, counters) in one write; NotFound if absent. A collection created
+  // again under that name numbers its maps after the dropped ones, so that
+  // caches keyed by index id (PreparedMaps) never mistake a new map for an
+  // old one.
+  Status DropCollection(const std::string& collection);
 
   // The collection's replication mark ({0, 0} if unknown or never replicated).
   ReplicationMark MarkOf(const std::string& collection) const;
@@ -234,10 +240,12 @@ class MapStore {
   // the stored map when the record has none of this build's version (*stale
   // is then set, so that the caller writes them back).
   Result<PlaceFeatures> PlaceFeaturesOf(const std::string& key, const internal::IndexedMap& indexed, bool* stale) const;
-  // The state of a collection, or nullptr. States are never removed, so the
-  // pointer stays valid while the store is open. The caller holds
+  // The state of a collection, or nullptr. States are never destroyed while
+  // the store is open (dropped ones move to dropped_), so the pointer stays valid. The caller holds
   // collections_mutex_ (shared) or write_mutex_.
   CollectionState* FindCollection(const std::string& collection) const;
+  // The counters of a collection about to be created. The caller holds write_mutex_.
+  internal::CollectionRecord NewRecord(const std::string& collection) const;
   Result<internal::IndexedMap> ReadIndexed(const std::string& key) const;
   Result<v1::MapMetadata> ReadMetadata(const std::string& key) const;
   // The kept record of an insert request id, if any.
@@ -264,6 +272,11 @@ class MapStore {
   // read them without it.
   mutable std::shared_mutex collections_mutex_;
   std::map<std::string, std::unique_ptr<CollectionState>> collections_;
+  // Dropped collections' states, emptied, kept while the store is open so
+  // that readers holding one stay valid (guarded by collections_mutex_), and
+  // the next index id each name had (guarded by write_mutex_).
+  std::vector<std::unique_ptr<CollectionState>> dropped_;
+  std::map<std::string, uint64_t> dropped_next_index_id_;
 };
 
 }  // namespace lmd::server

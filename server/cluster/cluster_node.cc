@@ -272,6 +272,7 @@ void ClusterNode::CatchUpLoop() {
       if (fenced_) continue;
     }
     CatchUpAll();
+    DropCopiesPlacedElsewhere();
   }
 }
 
@@ -762,6 +763,41 @@ void ClusterNode::CatchUpAll() {
   if (behind.empty() && !ready_.exchange(true)) {
     spdlog::info("cluster: {} holds every write of its copies: ready", node_id_);
     if (on_ready_) on_ready_();
+  }
+}
+
+// A copy the controller moved off this node (rebalancing, a lowered factor)
+// is deleted once etcd confirms that the placement lists this node nowhere
+// and that other in-sync copies hold the collection. A collection without a
+// placement (a store from before the cluster, an etcd that lost its keys) is
+// never touched.
+void ClusterNode::DropCopiesPlacedElsewhere() {
+  auto elsewhere = [&](const internal::Placement& p) {
+    const bool listed = p.primary() == node_id_ || InSync(p, node_id_) ||
+                        std::find(p.replicas().begin(), p.replicas().end(), node_id_) != p.replicas().end();
+    return !listed && !p.primary().empty() && p.in_sync_size() > 0;
+  };
+  std::vector<std::string> candidates;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    for (const auto& [name, placed] : placements_) {
+      if (elsewhere(placed.placement)) candidates.push_back(name);
+    }
+  }
+  for (const std::string& name : candidates) {
+    if (!store_->HasCollection(name)) continue;
+    Writer& writer = WriterOf(name);  // no write of it applied here meanwhile
+    std::lock_guard<std::mutex> write_lock(writer.mu);
+    Result<std::optional<EtcdValue>> now = etcd_->Get(Key("placement", name));
+    internal::Placement placement;
+    if (!now.ok() || !*now || !placement.ParseFromString((*now)->value) || !elsewhere(placement)) continue;
+    Status dropped = store_->DropCollection(name);
+    if (dropped.ok()) {
+      spdlog::info("cluster: {} deleted its copy of '{}' ({} in-sync copies elsewhere, primary {})", node_id_, name,
+                   placement.in_sync_size(), placement.primary());
+    } else if (dropped.code() != Status::Code::kNotFound) {
+      spdlog::warn("cluster: {} deleting its copy of '{}': {}", node_id_, name, dropped.ToString());
+    }
   }
 }
 

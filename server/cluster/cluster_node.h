@@ -140,6 +140,7 @@ class ClusterNode {
   void CatchUpLoop();
   void RunController();
   void CatchUpAll();
+  void DropCopiesPlacedElsewhere();
   Status CatchUp(const std::string& collection, const internal::Placement& placement);
   Status CopyFrom(const std::string& collection, const std::string& address, ReplicationMark* mark);
 

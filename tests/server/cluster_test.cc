@@ -81,6 +81,19 @@ class ClusterTest : public ::testing::Test {
     return status.ok() && answer.status() == grpc::health::v1::HealthCheckResponse::SERVING;
   }
 
+  // Node i's own store holds the collection.
+  bool HoldsCopy(int i) const {
+    auto stub = v1::LmdService::NewStub(grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials()));
+    grpc::ClientContext context;
+    context.AddMetadata("lmd-local", "1");
+    v1::ListMapsRequest request;
+    request.set_collection("site");
+    v1::ListMapsResponse response;
+    const grpc::Status listed = stub->ListMaps(&context, request, &response);
+    EXPECT_TRUE(listed.ok() || listed.error_code() == grpc::StatusCode::NOT_FOUND) << listed.error_message();
+    return listed.ok();
+  }
+
   // The map ids node i's own copy holds.
   std::set<std::string> Held(int i) const {
     auto stub = v1::LmdService::NewStub(grpc::CreateChannel(Address(i), grpc::InsecureChannelCredentials()));
@@ -174,8 +187,26 @@ TEST_F(ClusterTest, ACollectionKeepsTheCopiesItIsSetTo) {
   const auto give_up = Clock::now() + std::chrono::seconds(10);
   while (copies() != 1 && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_EQ(copies(), 1) << "the controller did not remove the two other copies";
+  // The two copies the controller moved off delete their data.
+  auto held_by = [&] {
+    int holders = 0;
+    for (int i = 0; i < 3; ++i) holders += HoldsCopy(i) ? 1 : 0;
+    return holders;
+  };
+  while (held_by() != 1 && Clock::now() < give_up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(held_by(), 1) << "a node the placement no longer lists kept its copy";
   ASSERT_TRUE(Insert("m2", 1));  // one copy takes writes on its own
   EXPECT_EQ(Held(0), (std::set<std::string>{"m1", "m2"}));
+
+  request.set_replication_factor(3);  // copies again: the dropped nodes copy the collection whole
+  ASSERT_TRUE(client->SetReplication(request, &set).ok());
+  const std::set<std::string> both{"m1", "m2"};
+  const auto copied_by = Clock::now() + std::chrono::seconds(10);
+  while ((Held(1) != both || Held(2) != both) && Clock::now() < copied_by) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_EQ(Held(1), both);
+  EXPECT_EQ(Held(2), both);
 
   request.set_replication_factor(0);
   EXPECT_EQ(client->SetReplication(request, &set).error_code(), grpc::StatusCode::INVALID_ARGUMENT);

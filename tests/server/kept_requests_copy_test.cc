@@ -3,32 +3,10 @@
 // retried insert is still answered once.
 #include <gtest/gtest.h>
 
-#include "proto/convert.h"
-#include "server/indexing.h"
-#include "server/map_store.h"
-#include "tests/server/test_server.h"
+#include "tests/server/store_fixture.h"
 
 namespace lmd::testing {
 namespace {
-
-std::unique_ptr<server::MapStore> OpenStore(const TempDir& dir) {
-  server::MapStoreOptions options;
-  options.data_dir = dir.path();
-  options.indexing = server::ProductIndexing(false);
-  return server::MapStore::Open(options).value();
-}
-
-std::vector<server::MapWrite> OneWrite(const server::MapStore& store, int points) {
-  server::MapWrite write;
-  write.map.mutable_metadata()->set_collection("site");
-  *write.map.mutable_map() = SquareRoomMap(points);
-  const server::DescribedMap described = server::DescribeMap(FromProto(write.map.map()), store.indexing(), true);
-  write.lmd = *described.lmd;
-  write.place = described.place.features;
-  std::vector<server::MapWrite> maps;
-  maps.push_back(std::move(write));
-  return maps;
-}
 
 TEST(KeptRequestsCopyTest, ACopyKeepsItsSourcesRequestIdsAndForgetsItsOwn) {
   TempDir source_dir, copy_dir;
