@@ -36,6 +36,7 @@ Result<LmddProcess> LmddProcess::Start(const std::string& binary, const std::str
   close(log);
   LmddProcess process;
   process.pid_ = pid;
+  process.data_dir_ = data_dir;
   std::string text;
   const std::regex listening("lmdd listening on port ([0-9]+)");
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
@@ -57,13 +58,28 @@ Result<LmddProcess> LmddProcess::Start(const std::string& binary, const std::str
   return Status::IoError("lmdd (" + binary + ") did not start within 30 s: " + text);
 }
 
-LmddProcess::LmddProcess(LmddProcess&& other) noexcept : pid_(other.pid_), port_(other.port_) { other.pid_ = -1; }
+LmddProcess::LmddProcess(LmddProcess&& other) noexcept
+    : pid_(other.pid_), port_(other.port_), data_dir_(std::move(other.data_dir_)) {
+  other.pid_ = -1;
+  other.data_dir_.clear();
+}
 
 LmddProcess::~LmddProcess() {
-  if (pid_ <= 0) return;
-  kill(pid_, SIGTERM);
-  int status = 0;
-  waitpid(pid_, &status, 0);
+  bool clean = true;
+  if (pid_ > 0) {
+    kill(pid_, SIGTERM);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  }
+  if (data_dir_.empty()) return;
+  std::error_code error;
+  std::filesystem::remove_all(data_dir_, error);
+  if (clean) {
+    std::filesystem::remove(data_dir_ + ".log", error);
+  } else {
+    std::fprintf(stderr, "lmdd did not exit cleanly: its log is %s.log\n", data_dir_.c_str());
+  }
 }
 
 std::string LmddBesideThisBinary() {

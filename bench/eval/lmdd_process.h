@@ -1,5 +1,8 @@
 // An lmdd started by lmd-eval for one run: its own data directory and a free
-// loopback port, stopped (SIGTERM, then waited for) when the object goes.
+// loopback port, stopped (SIGTERM, then waited for) when the object goes,
+// and its data directory deleted then (a run's collections are throwaway;
+// kept, they piled up in the temp directory run after run). Its log goes too
+// unless lmdd did not exit cleanly.
 #pragma once
 
 #include <string>
@@ -27,6 +30,7 @@ class LmddProcess {
   LmddProcess() = default;
   pid_t pid_ = -1;
   int port_ = 0;
+  std::string data_dir_;
 };
 
 // lmdd next to this binary in the build tree (<dir>/../server/lmdd), or "".
