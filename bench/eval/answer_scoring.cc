@@ -1,11 +1,52 @@
 #include "bench/eval/answer_scoring.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
+#include "core/align/scan_match.h"
 #include "core/eval/retrieval_metrics.h"
 
 namespace lmd::eval {
+
+namespace {
+
+// Verification's score (core/localize): overlap less the points in free space.
+double Fit(const std::vector<Point2>& query, const PreparedMap& db, const Pose2& pose) {
+  const Overlap o = MeasureOverlap(query, db, pose, ScanMatchOptions().inlier_radius_m);
+  return o.fraction - o.conflict_fraction;
+}
+
+bool FitsBetterThanTruth(const Dataset& d, const EvalQuery& q, const Answer::Hit& top) {
+  const PreparedMap db = PrepareMap(d.maps[top.db], ScanMatchOptions().map);
+  const std::vector<Point2>& points = d.maps[q.map].points;
+  return Fit(points, db, top.pose) > Fit(points, db, d.TruePose(q.map, top.db));
+}
+
+RivalKind ClassifyRival(const Dataset& d, const EvalQuery& q, const Answer& answer) {
+  if (answer.rival_score <= 0) return RivalKind::kNone;
+  for (const Answer::Hit& h : answer.hits) {
+    if (h.agrees_with_best || std::abs(h.score - answer.rival_score) > 1e-6) continue;
+    double err_m = 0, err_deg = 0;
+    PoseError(h.pose, d.TruePose(q.map, h.db), &err_m, &err_deg);
+    if (err_m <= kSurePoseM && err_deg <= kSurePoseDeg) return RivalKind::kSamePlace;
+    return d.ShowsPlace(q, h.db) ? RivalKind::kPlaceOff : RivalKind::kElsewhere;
+  }
+  return RivalKind::kSelf;
+}
+
+}  // namespace
+
+const char* RivalName(RivalKind kind) {
+  switch (kind) {
+    case RivalKind::kNone: return "none";
+    case RivalKind::kSelf: return "self";
+    case RivalKind::kSamePlace: return "same_place";
+    case RivalKind::kPlaceOff: return "place_off";
+    case RivalKind::kElsewhere: return "elsewhere";
+  }
+  return "?";
+}
 
 AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& answer, bool changed) {
   AnswerOutcome o;
@@ -22,6 +63,10 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
   }
   o.localized = answer.localized;
   o.localized_right = o.localized && o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
+  o.wrong_pose_fits_better = !changed && o.localized && o.pose_known && !o.localized_right &&
+                             o.pose_err_m <= kNearMissM && o.pose_err_deg <= kNearMissDeg &&
+                             FitsBetterThanTruth(d, q, answer.hits[0]);
+  o.rival = ClassifyRival(d, q, answer);
   o.confidence = answer.confidence;
   o.change_task = changed && q.change_ok && o.place_counted;
   if (changed) {
@@ -52,6 +97,11 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
     if (o.pose_known) err_m.push_back(o.pose_err_m), err_deg.push_back(o.pose_err_deg);
     s.localized += o.localized;
     s.localized_wrong += o.localized && !o.localized_right;
+    s.wrong_pose_fits_better += o.wrong_pose_fits_better;
+    if (!o.localized && o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg) {
+      ++s.unsure_right;
+      ++s.unsure_right_rival[static_cast<int>(o.rival)];
+    }
     if (o.change_task) {
       ++s.change_tasks;
       change_ok += o.first_change_mask == 1;
@@ -85,6 +135,9 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
   for (const AnswerSummary& s : logs) {
     m.queries += s.queries, m.place_queries += s.place_queries, m.pose_count += s.pose_count;
     m.localized += s.localized, m.localized_wrong += s.localized_wrong, m.change_tasks += s.change_tasks;
+    m.wrong_pose_fits_better += s.wrong_pose_fits_better;
+    m.unsure_right += s.unsure_right;
+    for (int k = 0; k < 5; ++k) m.unsure_right_rival[k] += s.unsure_right_rival[k];
     m.masks += s.masks, m.false_masks += s.false_masks;
     m.place_at_1 += s.place_at_1 / n, m.place_at_5 += s.place_at_5 / n;
     m.pose_err_m_median += s.pose_err_m_median / n, m.pose_err_m_p90 += s.pose_err_m_p90 / n;
@@ -98,20 +151,23 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
 }
 
 std::string SummaryJson(const AnswerSummary& s) {
-  char buf[1400];
+  char buf[1600];
   std::snprintf(buf, sizeof buf,
                 "{\"queries\": %zu, \"place_queries\": %zu, \"place_at_1\": %.4f, \"place_at_5\": %.4f, "
                 "\"pose_count\": %zu, \"pose_err_m_median\": %.4f, \"pose_err_m_p90\": %.4f, "
                 "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"localized\": %zu, "
                 "\"localized_share\": %.4f, \"localized_wrong\": %zu, \"localized_precision\": %.4f, "
+                "\"wrong_pose_fits_better\": %zu, \"unsure_right\": %zu, \"unsure_right_rival\": "
+                "{\"none\": %zu, \"self\": %zu, \"same_place\": %zu, \"place_off\": %zu, \"elsewhere\": %zu}, "
                 "\"change_tasks\": %zu, \"change_success_at_1\": %.4f, \"masks\": %zu, \"false_masks\": %zu, "
                 "\"false_mask_share\": %.4f, \"cpu_ms_p50\": %.3f, \"cpu_ms_p99\": %.3f, \"cpu_ms_mean\": %.3f, "
                 "\"wall_ms_p50\": %.3f, \"wall_ms_p99\": %.3f}",
                 s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
                 s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.localized, s.localized_share,
-                s.localized_wrong, s.localized_precision, s.change_tasks, s.change_success_at_1, s.masks,
-                s.false_masks, s.false_mask_share, s.cpu_ms_p50, s.cpu_ms_p99, s.cpu_ms_mean, s.wall_ms_p50,
-                s.wall_ms_p99);
+                s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
+                s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
+                s.unsure_right_rival[4], s.change_tasks, s.change_success_at_1, s.masks, s.false_masks,
+                s.false_mask_share, s.cpu_ms_p50, s.cpu_ms_p99, s.cpu_ms_mean, s.wall_ms_p50, s.wall_ms_p99);
   return buf;
 }
 

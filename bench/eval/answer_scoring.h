@@ -21,11 +21,28 @@ inline constexpr double kSurePoseDeg = 1.0;
 // changed point (and its hit shows the place).
 inline constexpr double kMaskHitM = 0.5;
 
+// A sure answer's pose this close to the truth, the place right, is a near
+// miss (AnswerOutcome::wrong_pose_fits_better).
+inline constexpr double kNearMissM = 0.5;
+inline constexpr double kNearMissDeg = 3.0;
+
+// Who the verdict's best rival is (AnswerOutcome::rival).
+enum class RivalKind {
+  kNone,       // no rival
+  kSelf,       // no returned hit scores rival_score: the best map at another pose (or a hit past top_k)
+  kSamePlace,  // a hit at the query's true pose in it (to kSurePose*): the maps were taken to disagree
+  kPlaceOff,   // a hit of the query's place at a wrong pose
+  kElsewhere,  // a hit that does not show the place, at a wrong pose: a look-alike
+};
+const char* RivalName(RivalKind kind);
+
 // One answer, in the dataset's map indices.
 struct Answer {
   struct Hit {
     size_t db = 0;
     Pose2 pose;  // query own frame in the db map's own frame
+    double score = 0.0;
+    bool agrees_with_best = true;
   };
   struct Mask {
     size_t db = 0;  // the hit it is credited to
@@ -34,6 +51,7 @@ struct Answer {
   std::vector<Hit> hits;    // best first
   bool localized = false;   // the verdict
   double confidence = 0.0;
+  double rival_score = 0.0;  // the verdict's best rival (0: none)
   std::vector<Mask> masks;  // best first
   double cpu_ms = 0.0;      // lmdd's (or the pipeline's) CPU on this query
   double wall_ms = 0.0;
@@ -46,6 +64,15 @@ struct AnswerOutcome {
   double pose_err_m = 0.0, pose_err_deg = 0.0;
   bool localized = false;
   bool localized_right = false;  // localized, top hit shows the place, pose within kSurePose*
+  // Sure and wrong by a near miss (the right place, the pose beyond
+  // kSurePose* but within kNearMiss*), yet the answered pose explains the
+  // query better than the logs' truth does (more of its points on the hit's,
+  // fewer in its free space): the truth's own error may be the cause.
+  // Unchanged queries only.
+  bool wrong_pose_fits_better = false;
+  // What kept the verdict's margin down: the best hit that disagrees with the
+  // best one, or none of the returned hits (the best map at another pose).
+  RivalKind rival = RivalKind::kNone;
   double confidence = 0.0;
   bool change_task = false;      // the query carried a simulated change (and has a place)
   size_t first_change_mask = 0;  // 1-based rank of the first mask that finds it; 0 = none
@@ -64,6 +91,9 @@ struct AnswerSummary {
   double localized_share = 0.0;      // of all queries
   double localized_precision = 1.0;  // right among localized answers (1 when none)
   size_t localized = 0, localized_wrong = 0;
+  size_t wrong_pose_fits_better = 0;  // of localized_wrong (AnswerOutcome::wrong_pose_fits_better)
+  // Queries with a place whose top hit is right but unsure, by their rival.
+  size_t unsure_right = 0, unsure_right_rival[5] = {};
   size_t change_tasks = 0;
   double change_success_at_1 = 0.0;  // of change tasks: the top mask finds the change
   size_t masks = 0, false_masks = 0;

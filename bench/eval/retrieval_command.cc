@@ -394,9 +394,12 @@ std::unique_ptr<Collection> BuildCollection(const Dataset& d, const LocalizeOpti
 
 Answer ToAnswer(const Localization& l, double cpu_ms) {
   Answer a;
-  for (const LocalizedHit& h : l.hits) a.hits.push_back({static_cast<size_t>(h.map_id), h.pose});
+  for (const LocalizedHit& h : l.hits) {
+    a.hits.push_back({static_cast<size_t>(h.map_id), h.pose, h.score, h.agrees_with_best});
+  }
   a.localized = l.verdict.sure;
   a.confidence = l.verdict.confidence;
+  a.rival_score = l.verdict.rival_score;
   for (const ChangeMask& m : l.changes) a.masks.push_back({static_cast<size_t>(m.db_map_id), m.points});
   a.cpu_ms = cpu_ms;
   return a;

@@ -107,7 +107,7 @@ template <typename Hit>
 Answer::Hit ToAnswerHit(const Hit& hit, const std::unordered_map<std::string, size_t>& index_of, bool* known) {
   const auto it = index_of.find(hit.map_id());
   *known = it != index_of.end();
-  return {*known ? it->second : 0, FromProto(hit.pose())};
+  return {*known ? it->second : 0, FromProto(hit.pose()), hit.score(), hit.agrees_with_best()};
 }
 
 Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std::string, size_t>& index_of) {
@@ -119,6 +119,7 @@ Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std:
   }
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
+  a.rival_score = r.localization().rival_score();
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -142,6 +143,7 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
   for (auto& [rank, mask] : masks) a.masks.push_back(std::move(mask));
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
+  a.rival_score = r.localization().rival_score();
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -301,11 +303,12 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     still.push_back(r.still);
     if (options.changes) changed.push_back(r.changed);
     char line[512];
-    std::snprintf(line, sizeof line, "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%.4f,%.4f,%.4f,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f\n",
+    std::snprintf(line, sizeof line,
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
-                  r.still.localized_right, r.still.confidence, r.best_score, r.rival_score, r.agreeing, r.still.cpu_ms,
-                  r.still.wall_ms, r.changed.localized, r.changed.first_change_mask, r.changed.masks,
+                  r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
+                  r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms, r.changed.localized, r.changed.first_change_mask, r.changed.masks,
                   r.changed.false_masks, r.changed_best, r.changed_rival, r.changed.cpu_ms);
     log.query_lines += line;
   }

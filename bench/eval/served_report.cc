@@ -11,9 +11,9 @@ namespace lmd::eval {
 namespace {
 
 constexpr char kCsvHeader[] =
-    "log,query,place_counted,first_place_hit,pose_err_m,pose_err_deg,localized,localized_right,confidence,"
-    "best_score,rival_score,agreeing,cpu_ms,wall_ms,changed_localized,first_change_mask,masks,false_masks,"
-    "changed_best_score,changed_rival_score,changed_cpu_ms\n";
+    "log,query,place_counted,first_place_hit,pose_err_m,pose_err_deg,localized,localized_right,"
+    "wrong_pose_fits_better,confidence,best_score,rival_score,rival,agreeing,cpu_ms,wall_ms,changed_localized,"
+    "first_change_mask,masks,false_masks,changed_best_score,changed_rival_score,changed_cpu_ms\n";
 
 struct Group {
   std::string label;
@@ -43,12 +43,12 @@ std::string Row(const std::string& label, const std::string& maps, const AnswerS
                 bool with_changes) {
   char buf[700];
   std::snprintf(buf, sizeof buf,
-                "| %s | %s | %zu / %zu | %.3f | %.3f | %.1f / %.1f cm, %.2f / %.2f deg | %.3f | %.4f (%zu wrong) | "
-                "%.1f / %.1f | %.1f / %.1f |",
+                "| %s | %s | %zu / %zu | %.3f | %.3f | %.1f / %.1f cm, %.2f / %.2f deg | %.3f | %.4f (%zu wrong, "
+                "%zu fit better) | %.1f / %.1f | %.1f / %.1f |",
                 label.c_str(), maps.c_str(), s.place_queries, s.queries, s.place_at_1, s.place_at_5,
                 100 * s.pose_err_m_median, 100 * s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90,
-                s.localized_share, s.localized_precision, s.localized_wrong, s.cpu_ms_p50, s.cpu_ms_p99, s.wall_ms_p50,
-                s.wall_ms_p99);
+                s.localized_share, s.localized_precision, s.localized_wrong, s.wrong_pose_fits_better, s.cpu_ms_p50,
+                s.cpu_ms_p99, s.wall_ms_p50, s.wall_ms_p99);
   std::string row = buf;
   if (with_changes) {
     std::snprintf(buf, sizeof buf, " %.3f (%zu) | %.3f (%zu of %zu) | %.3f / %.4f | %.1f / %.1f |",
@@ -69,7 +69,9 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
         "query with the maps within 10 m of travel excluded. place@k over the queries with a place among their "
         "candidates (>= 50 % of the query's points within 0.3 m of a hit's); pose error of right top hits "
         "(median / p90); sure = lmdd said `localized`; right = top hit shows the place with its pose within "
-        "0.2 m and 1 deg (over all sure answers, queries without a place included); CPU = lmdd's per call "
+        "0.2 m and 1 deg (over all sure answers, queries without a place included; fit better = of the "
+        "wrong, near misses (the right place within 0.5 m and 3 deg) whose answered pose explains the query "
+        "better than the logs' truth does, where the truth's own error may be the cause); CPU = lmdd's per call "
         "(server_cpu_ms, p50 / p99); wall = the client's, p50 / p99.";
   if (with_changes) {
     md += " Changes: DetectChanges of the map with a simulated change; top mask = share of change tasks "
@@ -82,6 +84,20 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
   md += "\n";
   for (const ServedLog& log : run.logs) md += Row(log.name, std::to_string(log.maps), log.still, log.changed, with_changes);
   for (const Group& g : Means(run)) md += Row("**" + g.label + "**", "", g.still, g.changed, with_changes);
+  md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
+        "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, or a rival past the hits returned), "
+        "same place (a hit whose pose is its true one, to 0.2 m and 1 deg, yet was taken to disagree), place off "
+        "(a hit of the place at a wrong pose), elsewhere (a look-alike: another place, at a wrong pose).\n\n"
+        "| log | right but unsure | none | self | same place | place off | elsewhere |\n|---|---|---|---|---|---|---|\n";
+  auto rivals = [](const std::string& label, const AnswerSummary& s) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %zu | %zu | %zu | %zu | %zu |\n", label.c_str(), s.unsure_right,
+                  s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
+                  s.unsure_right_rival[4]);
+    return std::string(buf);
+  };
+  for (const ServedLog& log : run.logs) md += rivals(log.name, log.still);
+  for (const Group& g : Means(run)) md += rivals("**" + g.label + "** (sum)", g.still);
   return md;
 }
 
