@@ -1,6 +1,8 @@
 #include "client/cli/args.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -55,6 +57,22 @@ Result<long> GetPositive(const Args& args, const std::string& key, long fallback
                                    ", got '" + value + "'");
   }
   return parsed;
+}
+
+Result<std::vector<double>> ParseNumberList(const std::string& text) {
+  std::vector<double> values;
+  for (size_t begin = 0; begin <= text.size();) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    const std::string word = text.substr(begin, end - begin);
+    char* stop = nullptr;
+    const double v = std::strtod(word.c_str(), &stop);
+    if (word.empty() || *stop != '\0' || !std::isfinite(v)) {
+      return Status::InvalidArgument("'" + word + "' is not a finite number");
+    }
+    values.push_back(v);
+    begin = end + 1;
+  }
+  return values;
 }
 
 Status CheckKnownOptions(const Args& args, const std::set<std::string>& known) {

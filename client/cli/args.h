@@ -33,6 +33,10 @@ Result<long> GetPositive(const Args& args, const std::string& key, long fallback
 // a number of metres from lo to hi, got '...'" otherwise.
 Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi);
 
+// "A,B,C" as finite numbers; InvalidArgument (without naming the option:
+// the caller says what it expects) for an empty or non-numeric word.
+Result<std::vector<double>> ParseNumberList(const std::string& text);
+
 // InvalidArgument naming the first option that is not in `known` (a typo
 // such as --topk must not be ignored).
 Status CheckKnownOptions(const Args& args, const std::set<std::string>& known);

@@ -40,5 +40,7 @@ int ChangesCommand(const CommandContext& ctx);
 int RenderCommand(const CommandContext& ctx);
 int ImportMapCommand(const CommandContext& ctx);
 int ExportMapCommand(const CommandContext& ctx);
+int SiteCommand(const CommandContext& ctx);
+int AnchorCommand(const CommandContext& ctx);
 
 }  // namespace lmd::cli

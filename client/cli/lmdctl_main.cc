@@ -25,6 +25,9 @@ constexpr char kUsage[] =
     "  render --collection C QUERY --out FILE.svg                  picture of the top hit and its changes\n"
     "  import-map --collection C --yaml MAP.yaml [--tile M]        a Nav2 map as anchored local maps (tiles of 12 m, half overlapping)\n"
     "  export-map --collection C --out MAP.yaml [--id ID]          anchored maps (or one map) as a Nav2 map (YAML + PGM)\n"
+    "  site --collection C --out FILE.svg                          the collection's anchored maps as one site map\n"
+    "  anchor --collection C --id ID --pose X,Y,THETA              re-anchor a stored map in the collection's frame\n"
+    "  anchor --collection C --file ANCHORS                        ... many: 'ID X Y THETA' lines (m, m, deg)\n"
     "  stats [--collection C]                                      server and collection statistics\n"
     "  cluster                                                     nodes, each collection's copies, in-sync sets and lag\n"
     "  cluster --collection C --copies N                           keep N copies of C (1 to 9) in the cluster\n"
@@ -57,7 +60,7 @@ const std::map<std::string, Command>& Commands() {
       {"demo", DemoCommand},       {"ingest", IngestCommand},
       {"query", QueryCommand},     {"changes", ChangesCommand},
       {"render", RenderCommand},   {"import-map", ImportMapCommand},
-      {"export-map", ExportMapCommand},
+      {"export-map", ExportMapCommand}, {"site", SiteCommand}, {"anchor", AnchorCommand},
   };
   return commands;
 }
@@ -103,7 +106,7 @@ int Main(int argc, char** argv) {
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
               "id", "robot", "out", "log", "map", "length", "step", "top-k", "verify", "method", "exclude", "dir",
               "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution", "prior", "prior-sigma",
-              "sequence", "sequence-step", "copies"});
+              "sequence", "sequence-step", "copies", "pose"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

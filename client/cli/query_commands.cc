@@ -33,21 +33,11 @@ Result<v1::Method> MethodFromArgs(const Args& args) {
 // the query map's own frame in the collection's frame.
 Result<v1::Prior> PriorFromArgs(const Args& args) {
   const std::string text = args.Get("prior");
-  std::vector<double> values;
-  for (size_t begin = 0; begin <= text.size();) {
-    const size_t end = std::min(text.find(',', begin), text.size());
-    const std::string word = text.substr(begin, end - begin);
-    char* stop = nullptr;
-    const double v = std::strtod(word.c_str(), &stop);
-    if (word.empty() || *stop != '\0' || !std::isfinite(v)) {
-      return Status::InvalidArgument("--prior must be X,Y,THETA[,RADIUS] (m, m, deg, m), got '" + text + "'");
-    }
-    values.push_back(v);
-    begin = end + 1;
-  }
-  if (values.size() != 3 && values.size() != 4) {
+  const Result<std::vector<double>> parsed = ParseNumberList(text);
+  if (!parsed.ok() || (parsed->size() != 3 && parsed->size() != 4)) {
     return Status::InvalidArgument("--prior must be X,Y,THETA[,RADIUS] (m, m, deg, m), got '" + text + "'");
   }
+  const std::vector<double>& values = *parsed;
   Result<double> sigma = GetMetres(args, "prior-sigma", 15.0, 0.0, 180.0);  // degrees, same bounds check
   if (!sigma.ok()) return Status::InvalidArgument("--prior-sigma must be a heading uncertainty from 0 to 180 deg");
   v1::Prior prior;

@@ -4,6 +4,8 @@
 // sure answer anchors the map inserted next, and bad priors or sequences are
 // refused without changing anything stored.
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -303,6 +305,97 @@ TEST_F(AnchoredQueryTest, AnchorsSurviveARestart) {
   EXPECT_FALSE(response.localization().prior_failed());
   ASSERT_GT(response.hits_size(), 0);
   EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
+}
+
+// A better estimate of where the site lies (the whole site moved by a rigid
+// transform, as a SLAM loop closure might): lmdctl anchor sets the stored
+// maps' anchors anew, and prior queries follow them.
+TEST_F(AnchoredQueryTest, ReanchoredMapsMoveTheSiteAndPriorQueriesFollow) {
+  const Pose2 moved{100.0, -50.0, M_PI / 2};
+  std::ofstream anchors(dir_.path() + "/anchors.txt");
+  anchors << "# id x y theta_deg\n";
+  for (size_t i = 0; i < kStored; i += kStride) {
+    const Pose2 a = Compose(moved, DemoMaps()[i].truth.global_frame);
+    anchors << DemoMaps()[i].id << " " << a.x << " " << a.y << " " << a.theta * 180.0 / M_PI << "\n";
+  }
+  anchors.close();
+  const uint64_t before = StoredMaps();
+  const std::string base = "--server " + server_->address() + " ";
+  const CliRun run = RunLmdctl(base + "anchor --collection site --file " + dir_.path() + "/anchors.txt", dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("re-anchored 50 maps of 'site'"), std::string::npos) << run.out;
+  EXPECT_EQ(StoredMaps(), before);  // replaced, not added
+
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id(DemoMaps()[30].id);
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  ASSERT_TRUE(got.map().metadata().has_anchor());
+  EXPECT_FALSE(got.map().metadata().anchor().derived());
+  EXPECT_LT(Distance(got.map().metadata().anchor().pose(), Compose(moved, DemoMaps()[30].truth.global_frame)), 1e-3);
+  EXPECT_EQ(got.map().metadata().robot_id(), "robot-1");  // the rest of the metadata is kept
+  EXPECT_EQ(got.map().metadata().sequence(), 31u);
+
+  const Pose2 truth = Compose(moved, DemoMaps()[31].truth.global_frame);
+  v1::RetrieveRequest request = Query(30);
+  request.mutable_prior()->set_radius_m(2.0);
+  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.0, truth.y, truth.theta});
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_FALSE(response.localization().prior_failed());
+  ASSERT_GT(response.hits_size(), 0);
+  EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
+  // Where the site was before, nothing is anchored any more.
+  const Pose2 old = DemoMaps()[31].truth.global_frame;
+  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{old.x + 1.0, old.y, old.theta});
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  EXPECT_TRUE(response.localization().prior_failed());
+}
+
+TEST_F(AnchoredQueryTest, AnAnchorForAnUnknownMapOrABadPoseChangesNothing) {
+  const std::string base = "--server " + server_->address() + " ";
+  std::ofstream(dir_.path() + "/missing.txt") << DemoMaps()[0].id << " 1 2 3\nno-such-map 4 5 6\n";
+  CliRun run = RunLmdctl(base + "anchor --collection site --file " + dir_.path() + "/missing.txt", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("NOT_FOUND"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("missing.txt:2; nothing re-anchored"), std::string::npos) << run.err;
+  std::ofstream(dir_.path() + "/twice.txt") << DemoMaps()[0].id << " 1 2 3\n" << DemoMaps()[0].id << " 4 5 6\n";
+  run = RunLmdctl(base + "anchor --collection site --file " + dir_.path() + "/twice.txt", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("twice.txt:2: map " + DemoMaps()[0].id + " is anchored already at"), std::string::npos)
+      << run.err;
+  run = RunLmdctl(base + "anchor --collection site --id " + DemoMaps()[0].id + " --pose 1,nan,3", dir_);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--pose must be X,Y,THETA"), std::string::npos) << run.err;
+  run = RunLmdctl(base + "anchor --collection site --id " + DemoMaps()[0].id + " --pose 1e300,0,0", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("INVALID_ARGUMENT"), std::string::npos) << run.err;
+
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id(DemoMaps()[0].id);
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server_->client().GetMap(get, &got).ok());
+  EXPECT_LT(Distance(got.map().metadata().anchor().pose(), DemoMaps()[0].truth.global_frame), 1e-3);
+}
+
+TEST_F(AnchoredQueryTest, TheSiteCommandDrawsEveryAnchoredMap) {
+  const std::string base = "--server " + server_->address() + " ";
+  const std::string svg = dir_.path() + "/site.svg";
+  CliRun run = RunLmdctl(base + "site --collection site --out " + svg, dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("(50 anchored maps, 0 of them anchored by lmdd)"), std::string::npos) << run.out;
+  std::ifstream file(svg);
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.rfind("<svg", 0), 0u);
+  EXPECT_NE(text.find("site map of site: 50 anchored maps"), std::string::npos);
+
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(OneMapRequest("bare", "a", SquareRoomMap()), &inserted).ok());
+  run = RunLmdctl(base + "site --collection bare --out " + svg, dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("collection 'bare' has no anchored maps"), std::string::npos) << run.err;
 }
 
 }  // namespace
