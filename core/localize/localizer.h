@@ -96,7 +96,11 @@ struct LocalizeOptions {
   // query first, and the window beyond the prior's radius; with
   // prior_first_stage, as many again from the first stage over the maps near
   // the prior (a sequence's check of where a hypothesis puts each map skips it).
-  size_t prior_maps = 4;
+  // 6 instead of 4: served (lmd-eval served --mode prior --no-changes), tuning
+  // logs (aces, fr079, intel, orebro) place@1 .963 -> .966, sure and wrong
+  // 23 -> 17, lmdd CPU +8 %; 8 gave .971 but 20 wrong at +25 % CPU. Held out
+  // after: .940 -> .943 (8: .946), 39 -> 40 wrong, CPU +4 %.
+  size_t prior_maps = 6;
   double prior_margin_m = 1.0;
   bool prior_first_stage = true;
   // A tight prior (radius and heading sigma at most these), as a tracking
