@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "client/cli/anchored_maps.h"
 #include "client/cli/commands.h"
 #include "client/cli/insert_maps.h"
 #include "core/grid/map_tiles.h"
@@ -54,49 +55,33 @@ int ExportMapCommand(const CommandContext& ctx) {
   if (collection.empty() || out.empty()) return 2;
   Result<double> resolution = GetMetres(ctx.args, "resolution", 0.05, 0.01, 1.0);
   if (!resolution.ok()) return Fail(resolution.status().message(), 2);
-  std::vector<std::string> ids;
-  std::vector<Pose2> frames;
+  AnchoredMaps site;
   if (ctx.args.Has("id")) {
-    ids.push_back(ctx.args.Get("id"));
-    frames.push_back(Pose2{});  // the map's own frame
+    v1::GetMapRequest get;
+    get.set_collection(collection);
+    get.set_map_id(ctx.args.Get("id"));
+    v1::GetMapResponse response;
+    const grpc::Status status = ctx.client.GetMap(get, &response);
+    if (!status.ok()) return FailCall(status);
+    site.maps.push_back(FromProto(response.map().map()));
+    site.anchors.push_back(Pose2{});  // the map's own frame
   } else {
-    v1::ListMapsRequest list;
-    list.set_collection(collection);
-    do {
-      v1::ListMapsResponse page;
-      const grpc::Status status = ctx.client.ListMaps(list, &page);
-      if (!status.ok()) return FailCall(status);
-      for (const auto& meta : page.maps()) {
-        if (!meta.has_pose_hint()) continue;
-        ids.push_back(meta.map_id());
-        frames.push_back(FromProto(meta.pose_hint()));
-      }
-      list.set_page_token(page.next_page_token());
-    } while (!list.page_token().empty());
-    if (ids.empty()) {
+    const grpc::Status read = ReadAnchoredMaps(ctx.client, collection, /*with_derived=*/false, &site);
+    if (!read.ok()) return FailCall(read);
+    if (site.maps.empty()) {
       return Fail("collection '" + collection + "' has no anchored maps (maps stored with a pose hint, as " +
                   "import-map stores them): give --id ID to export one map in its own frame");
     }
   }
-  std::vector<LocalMap> maps;
-  for (const std::string& id : ids) {
-    v1::GetMapRequest get;
-    get.set_collection(collection);
-    get.set_map_id(id);
-    v1::GetMapResponse response;
-    const grpc::Status status = ctx.client.GetMap(get, &response);
-    if (!status.ok()) return FailCall(status);
-    maps.push_back(FromProto(response.map().map()));
-  }
-  const OccupancyMap grid = RasterizeLocalMaps(maps, frames, *resolution);
+  const OccupancyMap grid = RasterizeLocalMaps(site.maps, site.anchors, *resolution);
   const Status written = WriteNav2Map(out, grid);
   if (!written.ok()) return Fail(written.message());
   if (ctx.json) {
     std::printf("{\"yaml\":\"%s\",\"width\":%d,\"height\":%d,\"resolution\":%g,\"maps\":%zu}\n", out.c_str(), grid.width,
-                grid.height, grid.resolution, maps.size());
+                grid.height, grid.resolution, site.maps.size());
   } else {
     std::printf("wrote %s (%d x %d cells at %g m, origin (%.2f, %.2f) m) from %zu %s\n", out.c_str(), grid.width,
-                grid.height, grid.resolution, grid.origin.x, grid.origin.y, maps.size(),
+                grid.height, grid.resolution, grid.origin.x, grid.origin.y, site.maps.size(),
                 ctx.args.Has("id") ? "map in its own frame" : "anchored maps");
   }
   return 0;

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "client/cli/anchored_maps.h"
 #include "client/cli/commands.h"
 #include "core/render/site_svg.h"
 #include "proto/convert.h"
@@ -87,47 +88,24 @@ int SiteCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
   const std::string out = collection.empty() ? "" : Required(ctx.args, "out");
   if (collection.empty() || out.empty()) return 2;
-  std::vector<std::string> ids;
-  std::vector<Pose2> anchors;
-  size_t derived = 0;
-  v1::ListMapsRequest list;
-  list.set_collection(collection);
-  do {
-    v1::ListMapsResponse page;
-    const grpc::Status status = ctx.client.ListMaps(list, &page);
-    if (!status.ok()) return FailCall(status);
-    for (const v1::MapMetadata& meta : page.maps()) {
-      if (!meta.has_anchor()) continue;
-      ids.push_back(meta.map_id());
-      anchors.push_back(FromProto(meta.anchor().pose()));
-      derived += meta.anchor().derived();
-    }
-    list.set_page_token(page.next_page_token());
-  } while (!list.page_token().empty());
-  if (ids.empty()) {
+  AnchoredMaps site;
+  const grpc::Status read = ReadAnchoredMaps(ctx.client, collection, /*with_derived=*/true, &site);
+  if (!read.ok()) return FailCall(read);
+  if (site.maps.empty()) {
     return Fail("collection '" + collection + "' has no anchored maps (maps stored with a pose hint, or " +
                 "localised surely by lmdd against anchored ones)");
   }
-  std::vector<LocalMap> maps;
-  for (const std::string& id : ids) {
-    v1::GetMapRequest get;
-    get.set_collection(collection);
-    get.set_map_id(id);
-    v1::GetMapResponse response;
-    const grpc::Status status = ctx.client.GetMap(get, &response);
-    if (!status.ok()) return FailCall(status);
-    maps.push_back(FromProto(response.map().map()));
-  }
   SitePicture picture;
-  for (size_t i = 0; i < maps.size(); ++i) picture.maps.push_back({&maps[i], anchors[i]});
-  picture.title = "site map of " + collection + ": " + std::to_string(maps.size()) + " anchored maps";
+  for (size_t i = 0; i < site.maps.size(); ++i) picture.maps.push_back({&site.maps[i], site.anchors[i]});
+  picture.title = "site map of " + collection + ": " + std::to_string(site.maps.size()) + " anchored maps";
   std::ofstream file(out);
   file << RenderSiteSvg(picture);
   if (!file) return Fail("cannot write " + out);
   if (ctx.json) {
-    std::printf("{\"svg\":\"%s\",\"maps\":%zu,\"derived\":%zu}\n", out.c_str(), maps.size(), derived);
+    std::printf("{\"svg\":\"%s\",\"maps\":%zu,\"derived\":%zu}\n", out.c_str(), site.maps.size(), site.derived);
   } else {
-    std::printf("wrote %s (%zu anchored maps, %zu of them anchored by lmdd)\n", out.c_str(), maps.size(), derived);
+    std::printf("wrote %s (%zu anchored maps, %zu of them anchored by lmdd)\n", out.c_str(), site.maps.size(),
+                site.derived);
   }
   return 0;
 }

@@ -69,6 +69,16 @@ class AnchoredQueryTest : public ::testing::Test {
     return request;
   }
 
+  // Query(i) with a prior at `pose`, radius 2 m.
+  v1::RetrieveResponse PriorQuery(size_t i, const Pose2& pose) const {
+    v1::RetrieveRequest request = Query(i);
+    *request.mutable_prior()->mutable_pose() = ToProto(pose);
+    request.mutable_prior()->set_radius_m(2.0);
+    v1::RetrieveResponse response;
+    EXPECT_TRUE(server_->client().Retrieve(request, &response).ok());
+    return response;
+  }
+
   uint64_t StoredMaps() const {
     v1::ListCollectionsResponse listed;
     EXPECT_TRUE(server_->client().ListCollections(&listed).ok());
@@ -297,11 +307,7 @@ TEST_F(AnchoredQueryTest, AnchorsSurviveARestart) {
   server_->Stop();
   server_ = std::make_unique<TestServer>(dir_.path());
   const Pose2 truth = DemoMaps()[31].truth.global_frame;
-  v1::RetrieveRequest request = Query(30);
-  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.0, truth.y, truth.theta});
-  request.mutable_prior()->set_radius_m(2.0);
-  v1::RetrieveResponse response;
-  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  const v1::RetrieveResponse response = PriorQuery(30, Pose2{truth.x + 1.0, truth.y, truth.theta});
   EXPECT_FALSE(response.localization().prior_failed());
   ASSERT_GT(response.hits_size(), 0);
   EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
@@ -338,19 +344,13 @@ TEST_F(AnchoredQueryTest, ReanchoredMapsMoveTheSiteAndPriorQueriesFollow) {
   EXPECT_EQ(got.map().metadata().sequence(), 31u);
 
   const Pose2 truth = Compose(moved, DemoMaps()[31].truth.global_frame);
-  v1::RetrieveRequest request = Query(30);
-  request.mutable_prior()->set_radius_m(2.0);
-  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.0, truth.y, truth.theta});
-  v1::RetrieveResponse response;
-  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  const v1::RetrieveResponse response = PriorQuery(30, Pose2{truth.x + 1.0, truth.y, truth.theta});
   EXPECT_FALSE(response.localization().prior_failed());
   ASSERT_GT(response.hits_size(), 0);
   EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.1);
   // Where the site was before, nothing is anchored any more.
   const Pose2 old = DemoMaps()[31].truth.global_frame;
-  *request.mutable_prior()->mutable_pose() = ToProto(Pose2{old.x + 1.0, old.y, old.theta});
-  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
-  EXPECT_TRUE(response.localization().prior_failed());
+  EXPECT_TRUE(PriorQuery(30, Pose2{old.x + 1.0, old.y, old.theta}).localization().prior_failed());
 }
 
 TEST_F(AnchoredQueryTest, AnAnchorForAnUnknownMapOrABadPoseChangesNothing) {
