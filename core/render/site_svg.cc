@@ -119,9 +119,9 @@ std::string RenderSiteSvg(const SitePicture& picture, int* labels_left_out) {
   }
   svg.TextPx(10, 20, picture.title, 15.0);
   std::string legend = "grey: stored maps in the site frame";  // what the picture shows, only
-  if (!picture.route.empty()) legend += "   blue: the robot's true route";
-  if (!picture.changes.empty()) legend += "   red circles: changes found";
-  if (!picture.true_changes.empty()) legend += "   green boxes: true changes";
+  if (!picture.route.empty()) legend += "; blue: the robot's true route";
+  if (!picture.changes.empty()) legend += "; red circles: changes found";
+  if (!picture.true_changes.empty()) legend += "; green boxes: true changes";
   svg.TextPx(10, 38, legend, 11.0, "#444444");
   if (!picture.fixes.empty()) {
     svg.TextPx(10, 53, "fixes (arrow: heading, number: order): green right (0.2 m, 1 deg), red wrong, orange not sure",

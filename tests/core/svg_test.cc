@@ -4,6 +4,7 @@
 
 #include "core/describe/describer.h"
 #include "core/render/local_map_svg.h"
+#include "core/render/site_svg.h"
 #include "core/viewpoint/viewpoint.h"
 #include "tests/core/toy_world.h"
 
@@ -40,6 +41,26 @@ TEST(LocalMapSvgTest, PictureShowsBothViewpointsAndTheFeatures) {
   EXPECT_NE(doc.find("#9467bd"), std::string::npos);  // features
   EXPECT_NE(doc.find("<polyline"), std::string::npos);  // trajectory
   EXPECT_NE(doc.find("</svg>"), std::string::npos);
+}
+
+// The site picture's legend names what it shows: a site map alone (lmdctl
+// site) has no route, fixes or changes to explain.
+TEST(SiteSvgTest, TheLegendNamesOnlyWhatThePictureShows) {
+  LocalMap room;
+  room.points = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
+  SitePicture site;
+  site.maps.push_back({&room, Pose2{10, 5, 0.5}});
+  const std::string alone = RenderSiteSvg(site);
+  EXPECT_NE(alone.find("grey: stored maps in the site frame"), std::string::npos);
+  EXPECT_EQ(alone.find("true route"), std::string::npos);
+  EXPECT_EQ(alone.find("fixes (arrow"), std::string::npos);
+
+  site.route = {{10, 5}, {12, 6}};
+  site.fixes.push_back({Pose2{11, 5, 0}, FixOutcome::kRight, "1"});
+  const std::string tracked = RenderSiteSvg(site);
+  EXPECT_NE(tracked.find("; blue: the robot's true route"), std::string::npos);
+  EXPECT_NE(tracked.find("fixes (arrow"), std::string::npos);
+  EXPECT_EQ(tracked.find("changes found"), std::string::npos);
 }
 
 }  // namespace
