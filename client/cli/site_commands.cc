@@ -9,6 +9,7 @@
 
 #include "client/cli/anchored_maps.h"
 #include "client/cli/commands.h"
+#include "client/cli/output.h"
 #include "core/render/site_svg.h"
 #include "proto/convert.h"
 
@@ -73,11 +74,8 @@ int WriteBatch(const CommandContext& ctx, const v1::InsertMapsRequest& batch, si
     return FailCall(grpc::Status(status.error_code(), status.error_message() + " (" + std::to_string(written_before) +
                                                           " maps were re-anchored before it)"));
   }
-  for (const v1::InsertMapRequest& m : batch.maps()) {
-    if (!ctx.json) continue;
-    const Pose2 p = FromProto(m.metadata().pose_hint());
-    std::printf("{\"id\":\"%s\",\"collection\":\"%s\",\"anchor\":{\"x\":%.4f,\"y\":%.4f,\"theta_deg\":%.4f}}\n",
-                m.metadata().map_id().c_str(), m.metadata().collection().c_str(), p.x, p.y, p.theta * 180.0 / M_PI);
+  if (ctx.json) {  // each map as stored now, its anchor among its metadata
+    for (const v1::MapMetadata& stored : response.maps()) std::printf("%s\n", MapJsonLine(stored).c_str());
   }
   return 0;
 }

@@ -3,6 +3,7 @@
 // collection's frame, sequence queries check a lost robot's earlier maps, a
 // sure answer anchors the map inserted next, and bad priors or sequences are
 // refused without changing anything stored.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -342,6 +343,15 @@ TEST_F(AnchoredQueryTest, ReanchoredMapsMoveTheSiteAndPriorQueriesFollow) {
   EXPECT_LT(Distance(got.map().metadata().anchor().pose(), Compose(moved, DemoMaps()[30].truth.global_frame)), 1e-3);
   EXPECT_EQ(got.map().metadata().robot_id(), "robot-1");  // the rest of the metadata is kept
   EXPECT_EQ(got.map().metadata().sequence(), 31u);
+  // --json: the map as stored, one line, its anchor among its metadata.
+  const Pose2 again = Compose(moved, DemoMaps()[30].truth.global_frame);
+  const CliRun json = RunLmdctl(base + "--json anchor --collection site --id " + DemoMaps()[30].id + " --pose " +
+                                    std::to_string(again.x) + "," + std::to_string(again.y) + "," +
+                                    std::to_string(again.theta * 180.0 / M_PI), dir_);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(json.out.rfind("{\"id\":\"" + DemoMaps()[30].id + "\"", 0), 0u) << json.out;
+  EXPECT_NE(json.out.find("\"anchor\":{\"pose\":{"), std::string::npos) << json.out;
+  EXPECT_EQ(std::count(json.out.begin(), json.out.end(), '\n'), 1);
 
   const Pose2 truth = Compose(moved, DemoMaps()[31].truth.global_frame);
   const v1::RetrieveResponse response = PriorQuery(30, Pose2{truth.x + 1.0, truth.y, truth.theta});
