@@ -11,7 +11,8 @@ namespace lmd::eval {
 
 namespace {
 
-// Verification's score (core/localize): overlap less the points in free space.
+// The part of verification's score (core/localize) that the query's points
+// give: their overlap less their share in the map's free space.
 double Fit(const std::vector<Point2>& query, const PreparedMap& db, const Pose2& pose) {
   const Overlap o = MeasureOverlap(query, db, pose, ScanMatchOptions().inlier_radius_m);
   return o.fraction - o.conflict_fraction;
@@ -61,8 +62,9 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
     o.pose_known = true;
     PoseError(answer.hits[0].pose, d.TruePose(q.map, answer.hits[0].db), &o.pose_err_m, &o.pose_err_deg);
   }
+  o.top_right = o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
   o.localized = answer.localized;
-  o.localized_right = o.localized && o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
+  o.localized_right = o.localized && o.top_right;
   o.wrong_pose_fits_better = !changed && o.localized && o.pose_known && !o.localized_right &&
                              o.pose_err_m <= kNearMissM && o.pose_err_deg <= kNearMissDeg &&
                              FitsBetterThanTruth(d, q, answer.hits[0]);
@@ -98,7 +100,7 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
     s.localized += o.localized;
     s.localized_wrong += o.localized && !o.localized_right;
     s.wrong_pose_fits_better += o.wrong_pose_fits_better;
-    if (!o.localized && o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg) {
+    if (!o.localized && o.top_right) {
       ++s.unsure_right;
       ++s.unsure_right_rival[static_cast<int>(o.rival)];
     }
@@ -137,7 +139,7 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
     m.localized += s.localized, m.localized_wrong += s.localized_wrong, m.change_tasks += s.change_tasks;
     m.wrong_pose_fits_better += s.wrong_pose_fits_better;
     m.unsure_right += s.unsure_right;
-    for (int k = 0; k < 5; ++k) m.unsure_right_rival[k] += s.unsure_right_rival[k];
+    for (int k = 0; k < kRivalKinds; ++k) m.unsure_right_rival[k] += s.unsure_right_rival[k];
     m.masks += s.masks, m.false_masks += s.false_masks;
     m.place_at_1 += s.place_at_1 / n, m.place_at_5 += s.place_at_5 / n;
     m.pose_err_m_median += s.pose_err_m_median / n, m.pose_err_m_p90 += s.pose_err_m_p90 / n;

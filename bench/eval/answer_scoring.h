@@ -34,6 +34,7 @@ enum class RivalKind {
   kPlaceOff,   // a hit of the query's place at a wrong pose
   kElsewhere,  // a hit that does not show the place, at a wrong pose: a look-alike
 };
+inline constexpr int kRivalKinds = 5;
 const char* RivalName(RivalKind kind);
 
 // One answer, in the dataset's map indices.
@@ -62,8 +63,9 @@ struct AnswerOutcome {
   int first_place_hit = -1;    // position of the first hit showing it; -1 = none
   bool pose_known = false;     // the top hit shows the place
   double pose_err_m = 0.0, pose_err_deg = 0.0;
+  bool top_right = false;        // the top hit shows the place, its pose within kSurePose*
   bool localized = false;
-  bool localized_right = false;  // localized, top hit shows the place, pose within kSurePose*
+  bool localized_right = false;  // localized and top_right
   // Sure and wrong by a near miss (the right place, the pose beyond
   // kSurePose* but within kNearMiss*), yet the answered pose explains the
   // query better than the logs' truth does (more of its points on the hit's,
@@ -92,8 +94,8 @@ struct AnswerSummary {
   double localized_precision = 1.0;  // right among localized answers (1 when none)
   size_t localized = 0, localized_wrong = 0;
   size_t wrong_pose_fits_better = 0;  // of localized_wrong (AnswerOutcome::wrong_pose_fits_better)
-  // Queries with a place whose top hit is right but unsure, by their rival.
-  size_t unsure_right = 0, unsure_right_rival[5] = {};
+  // Answers top_right but not localized, by their rival.
+  size_t unsure_right = 0, unsure_right_rival[kRivalKinds] = {};
   size_t change_tasks = 0;
   double change_success_at_1 = 0.0;  // of change tasks: the top mask finds the change
   size_t masks = 0, false_masks = 0;

@@ -308,8 +308,9 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
-                  r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms, r.changed.localized, r.changed.first_change_mask, r.changed.masks,
-                  r.changed.false_masks, r.changed_best, r.changed_rival, r.changed.cpu_ms);
+                  r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms,
+                  r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
+                  r.changed_best, r.changed_rival, r.changed.cpu_ms);
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);

@@ -85,10 +85,12 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
   for (const ServedLog& log : run.logs) md += Row(log.name, std::to_string(log.maps), log.still, log.changed, with_changes);
   for (const Group& g : Means(run)) md += Row("**" + g.label + "**", "", g.still, g.changed, with_changes);
   md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
-        "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, or a rival past the hits returned), "
-        "same place (a hit whose pose is its true one, to 0.2 m and 1 deg, yet was taken to disagree), place off "
-        "(a hit of the place at a wrong pose), elsewhere (a look-alike: another place, at a wrong pose).\n\n"
-        "| log | right but unsure | none | self | same place | place off | elsewhere |\n|---|---|---|---|---|---|---|\n";
+        "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, "
+        "or a rival past the hits returned), same place (a hit whose pose is its true one, to 0.2 m and 1 deg, "
+        "yet was taken to disagree), place off (a hit of the place at a wrong pose), elsewhere (a look-alike: "
+        "another place, at a wrong pose).\n\n"
+        "| log | right but unsure | none | self | same place | place off | elsewhere |\n"
+        "|---|---|---|---|---|---|---|\n";
   auto rivals = [](const std::string& label, const AnswerSummary& s) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "| %s | %zu | %zu | %zu | %zu | %zu | %zu |\n", label.c_str(), s.unsure_right,

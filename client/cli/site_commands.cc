@@ -27,17 +27,11 @@ struct NewAnchor {
   std::string where;  // "--pose" or "FILE:LINE", for messages
 };
 
-Result<Pose2> PoseFromDegrees(const std::vector<double>& v) {
-  if (v.size() != 3) return Status::InvalidArgument("a pose is X Y THETA (m, m, deg)");
-  return Pose2{v[0], v[1], v[2] * M_PI / 180.0};
-}
-
-// --pose X,Y,THETA for --id.
-Result<NewAnchor> AnchorFromPose(const Args& args) {
-  Result<std::vector<double>> numbers = ParseNumberList(args.Get("pose"));
-  Result<Pose2> pose = numbers.ok() ? PoseFromDegrees(*numbers) : Result<Pose2>(numbers.status());
-  if (!pose.ok()) return Status::InvalidArgument("--pose must be X,Y,THETA (m, m, deg), got '" + args.Get("pose") + "'");
-  return NewAnchor{args.Get("id"), *pose, "--pose"};
+// "X,Y,THETA" (m, m, deg).
+Result<Pose2> ParsePose(const std::string& text) {
+  const Result<std::vector<double>> v = ParseNumberList(text);
+  if (!v.ok() || v->size() != 3) return Status::InvalidArgument("not X,Y,THETA (m, m, deg): '" + text + "'");
+  return Pose2{(*v)[0], (*v)[1], (*v)[2] * M_PI / 180.0};
 }
 
 // "ID X Y THETA" lines (m, m, deg; # starts a comment), each map once.
@@ -53,13 +47,13 @@ Result<std::vector<NewAnchor>> AnchorsFromFile(const std::string& path) {
     std::string id, x, y, theta, extra;
     if (!(words >> id)) continue;  // blank or comment
     const std::string where = path + ":" + std::to_string(number);
-    Result<std::vector<double>> numbers = (words >> x >> y >> theta) && !(words >> extra)
-                                              ? ParseNumberList(x + "," + y + "," + theta)
-                                              : Result<std::vector<double>>(Status::InvalidArgument(""));
-    if (!numbers.ok()) return Status::InvalidArgument(where + ": expected 'ID X Y THETA' (m, m, deg)");
+    const Result<Pose2> pose = (words >> x >> y >> theta) && !(words >> extra)
+                                   ? ParsePose(x + "," + y + "," + theta)
+                                   : Result<Pose2>(Status::InvalidArgument("not four words"));
+    if (!pose.ok()) return Status::InvalidArgument(where + ": expected 'ID X Y THETA' (m, m, deg)");
     const auto [seen, fresh] = first_seen.emplace(id, where);
     if (!fresh) return Status::InvalidArgument(where + ": map " + id + " is anchored already at " + seen->second);
-    anchors.push_back({id, *PoseFromDegrees(*numbers), where});
+    anchors.push_back({id, *pose, where});
   }
   if (anchors.empty()) return Status::InvalidArgument(path + ": no 'ID X Y THETA' line");
   return anchors;
@@ -122,9 +116,9 @@ int AnchorCommand(const CommandContext& ctx) {
     if (!read.ok()) return Fail(read.status().message());
     anchors = std::move(*read);
   } else {
-    Result<NewAnchor> one = AnchorFromPose(ctx.args);
-    if (!one.ok()) return Fail(one.status().message(), 2);
-    anchors.push_back(std::move(*one));
+    const Result<Pose2> pose = ParsePose(ctx.args.Get("pose"));
+    if (!pose.ok()) return Fail("--pose must be X,Y,THETA (m, m, deg), got '" + ctx.args.Get("pose") + "'", 2);
+    anchors.push_back({ctx.args.Get("id"), *pose, "--pose"});
   }
   // Every map read before anything is written: an unknown id changes nothing.
   std::vector<v1::InsertMapRequest> writes;
@@ -135,7 +129,8 @@ int AnchorCommand(const CommandContext& ctx) {
     v1::GetMapResponse stored;
     const grpc::Status status = ctx.client.GetMap(get, &stored);
     if (!status.ok()) {
-      return FailCall(grpc::Status(status.error_code(), status.error_message() + " (" + a.where + "; nothing re-anchored)"));
+      return FailCall(
+          grpc::Status(status.error_code(), status.error_message() + " (" + a.where + "; nothing re-anchored)"));
     }
     v1::InsertMapRequest& write = writes.emplace_back();
     *write.mutable_metadata() = stored.map().metadata();
@@ -148,7 +143,8 @@ int AnchorCommand(const CommandContext& ctx) {
   size_t written = 0, bytes = 0;
   for (v1::InsertMapRequest& write : writes) {
     const size_t size = write.ByteSizeLong();
-    if (batch.maps_size() > 0 && (batch.maps_size() >= static_cast<int>(kAnchorBatchMaps) || bytes + size > kAnchorBatchBytes)) {
+    const bool full = batch.maps_size() >= static_cast<int>(kAnchorBatchMaps) || bytes + size > kAnchorBatchBytes;
+    if (batch.maps_size() > 0 && full) {
       if (int code = WriteBatch(ctx, batch, written)) return code;
       written += static_cast<size_t>(batch.maps_size());
       batch.clear_maps();
