@@ -41,6 +41,20 @@ struct CollectionState {
   // first. A writer (holding MapStore::write_mutex_, as every writer of it
   // does) may read it without index_mutex.
   std::map<uint64_t, std::string> map_ids;
+  // Map id -> index id: a request's excluded maps, by index id, once per
+  // request instead of a look-up in map_ids per stored feature read.
+  std::unordered_map<std::string, uint64_t> index_ids;
+
+  void Name(uint64_t id, const std::string& map_id) {
+    map_ids[id] = map_id;
+    index_ids[map_id] = id;
+  }
+  void Forget(uint64_t id) {
+    const auto it = map_ids.find(id);
+    if (it == map_ids.end()) return;
+    index_ids.erase(it->second);
+    map_ids.erase(it);
+  }
 };
 
 namespace {
@@ -48,6 +62,19 @@ namespace {
 constexpr char kFormatKey[] = "format";
 constexpr char kFormatVersion[] = "lmd-store-2";
 constexpr char kIndexingKey[] = "indexing";
+
+// Whether an index id is one of the maps a request excludes (by map id);
+// empty when it excludes none that is stored. Call with state.index_mutex
+// held: the indexes and the ids change together under it.
+std::function<bool(uint64_t)> ExcludedFrom(const CollectionState& state, const std::unordered_set<std::string>& excluded) {
+  std::unordered_set<uint64_t> ids;
+  for (const std::string& map_id : excluded) {
+    const auto it = state.index_ids.find(map_id);
+    if (it != state.index_ids.end()) ids.insert(it->second);
+  }
+  if (ids.empty()) return {};
+  return [ids = std::move(ids)](uint64_t id) { return ids.count(id) != 0; };
+}
 
 // Maps an insert may evict beyond its own count (InsertLimits::retain_maps).
 constexpr size_t kMaxExtraEvictions = 256;
@@ -263,7 +290,7 @@ Status MapStore::RebuildIndexes() {
       if (!stored.ParseFromString(value)) return Status::Corruption("stored map " + key + " does not parse");
       AnchorFromMetadata(indexed.index_id(), *meta, stored.map(), &state->anchors);
     }
-    state->map_ids[indexed.index_id()] = key.substr(slash + 1);
+    state->Name(indexed.index_id(), key.substr(slash + 1));
     if (++maps % 100000 == 0) spdlog::info("rebuilding indexes: {} maps", maps);
   }
   Status status = FromRocks(it->status(), "reading descriptors");
@@ -583,7 +610,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
       state->places.Remove(id);
       state->routes.erase(id);
       state->anchors.Remove(id);
-      state->map_ids.erase(id);
+      state->Forget(id);
     }
     for (const auto& [id, write] : change.added) {
       Status added = state->index.Add(id, write->lmd);
@@ -592,7 +619,7 @@ Status MapStore::InsertMaps(std::vector<MapWrite>* maps, const InsertLimits& lim
       MapSource::Route route;
       if (RouteFromMetadata(write->map.metadata(), &route)) state->routes[id] = route;
       AnchorFromMetadata(id, write->map.metadata(), write->map.map(), &state->anchors);
-      state->map_ids[id] = write->map.metadata().map_id();
+      state->Name(id, write->map.metadata().map_id());
     }
   }
   return Status::Ok();
@@ -671,7 +698,7 @@ Status MapStore::DeleteMap(const std::string& collection, const std::string& map
   state->places.Remove(indexed->index_id());
   state->routes.erase(indexed->index_id());
   state->anchors.Remove(indexed->index_id());
-  state->map_ids.erase(indexed->index_id());
+  state->Forget(indexed->index_id());
   return Status::Ok();
 }
 
@@ -705,6 +732,7 @@ Status MapStore::DropCollection(const std::string& collection) {
   }
   state->routes.clear();
   state->map_ids.clear();
+  state->index_ids.clear();
   return Status::Ok();
 }
 
@@ -857,11 +885,11 @@ Result<std::vector<PlaceHypothesis>> MapStore::SearchPlaces(const std::string& c
   }
   if (state == nullptr) return Status::NotFound("unknown collection '" + collection + "'");
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
-  auto is_excluded = [&](uint64_t id) {
-    const auto it = state->map_ids.find(id);
-    return it == state->map_ids.end() || excluded.count(it->second) != 0 ||
-           (options.anchored_only && !state->anchors.Anchor(id));
-  };
+  const std::function<bool(uint64_t)> by_request = ExcludedFrom(*state, excluded);
+  std::function<bool(uint64_t)> is_excluded = by_request;
+  if (options.anchored_only) {
+    is_excluded = [&](uint64_t id) { return (by_request && by_request(id)) || !state->anchors.Anchor(id); };
+  }
   return state->places.Search(query, options, is_excluded, stats);
 }
 
@@ -918,7 +946,8 @@ bool MapStore::HasAnchors(const std::string& collection) const {
 }
 
 std::vector<MapSource::Anchored> MapStore::AnchoredNear(const std::string& collection, const Point2& centre,
-                                                        double radius_m) const {
+                                                        double radius_m, size_t per_cell,
+                                                        const std::unordered_set<std::string>& excluded) const {
   const CollectionState* state = nullptr;
   {
     std::shared_lock<std::shared_mutex> lock(collections_mutex_);
@@ -926,7 +955,21 @@ std::vector<MapSource::Anchored> MapStore::AnchoredNear(const std::string& colle
   }
   if (state == nullptr) return {};
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
-  return state->anchors.Near(centre, radius_m);
+  return state->anchors.Near(centre, radius_m, per_cell, ExcludedFrom(*state, excluded));
+}
+
+std::vector<MapSource::Anchored> MapStore::NearestAnchored(const std::string& collection,
+                                                           const std::vector<Point2>& path, double max_gap_m,
+                                                           size_t count,
+                                                           const std::unordered_set<std::string>& excluded) const {
+  const CollectionState* state = nullptr;
+  {
+    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+    state = FindCollection(collection);
+  }
+  if (state == nullptr) return {};
+  std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
+  return state->anchors.NearestByPath(path, max_gap_m, count, ExcludedFrom(*state, excluded));
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {

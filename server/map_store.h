@@ -215,9 +215,13 @@ class MapStore {
   std::optional<Pose2> AnchorOf(const std::string& collection, uint64_t index_id) const;
   // Whether the collection has any anchored map (false if unknown).
   bool HasAnchors(const std::string& collection) const;
-  // The collection's anchored maps whose box meets the disk (AnchorIndex::Near).
-  std::vector<MapSource::Anchored> AnchoredNear(const std::string& collection, const Point2& centre,
-                                                double radius_m) const;
+  // The collection's anchored maps near a disk and nearest a path
+  // (AnchorIndex::Near and NearestByPath), those in `excluded` passed over.
+  std::vector<MapSource::Anchored> AnchoredNear(const std::string& collection, const Point2& centre, double radius_m,
+                                                size_t per_cell, const std::unordered_set<std::string>& excluded) const;
+  std::vector<MapSource::Anchored> NearestAnchored(const std::string& collection, const std::vector<Point2>& path,
+                                                   double max_gap_m, size_t count,
+                                                   const std::unordered_set<std::string>& excluded) const;
 
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in

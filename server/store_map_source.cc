@@ -33,15 +33,15 @@ std::optional<Pose2> StoreMapSource::AnchorOf(uint64_t map_id) const { return st
 
 bool StoreMapSource::HasAnchors() const { return store_->HasAnchors(collection_); }
 
-std::vector<MapSource::Anchored> StoreMapSource::AnchoredNear(const Point2& centre, double radius_m) const {
-  std::vector<Anchored> near = store_->AnchoredNear(collection_, centre, radius_m);
-  near.erase(std::remove_if(near.begin(), near.end(),
-                            [&](const Anchored& a) {
-                              Result<IndexedEntry> entry = store_->Indexed(collection_, a.map_id);
-                              return !entry.ok() || excluded_.count(entry->map_id) != 0;
-                            }),
-             near.end());
-  return near;
+std::vector<MapSource::Anchored> StoreMapSource::AnchoredNear(const Point2& centre, double radius_m, size_t per_cell,
+                                                              const std::function<bool(uint64_t)>&) const {
+  return store_->AnchoredNear(collection_, centre, radius_m, per_cell, excluded_);
+}
+
+std::vector<MapSource::Anchored> StoreMapSource::NearestAnchored(const std::vector<Point2>& path, double max_gap_m,
+                                                                 size_t count,
+                                                                 const std::function<bool(uint64_t)>&) const {
+  return store_->NearestAnchored(collection_, path, max_gap_m, count, excluded_);
 }
 
 }  // namespace lmd::server

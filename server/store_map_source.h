@@ -18,8 +18,8 @@ namespace lmd::server {
 class StoreMapSource : public MapSource {
  public:
   // `store` and `cache` must outlive the source. Maps whose id is in
-  // `excluded` are never returned by Search (the core's own predicate,
-  // which works on index ids, is not used).
+  // `excluded` are never returned by Search or the anchored queries (the
+  // core's own predicate, which works on index ids, is not used).
   StoreMapSource(const MapStore* store, PreparedMapCache* cache, std::string collection,
                  std::unordered_set<std::string> excluded)
       : store_(store), cache_(cache), collection_(std::move(collection)), excluded_(std::move(excluded)) {}
@@ -31,7 +31,10 @@ class StoreMapSource : public MapSource {
   bool RouteOf(uint64_t map_id, Route* route) const override;
   std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
   bool HasAnchors() const override;
-  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
+  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m, size_t per_cell,
+                                     const std::function<bool(uint64_t)>& excluded) const override;
+  std::vector<Anchored> NearestAnchored(const std::vector<Point2>& path, double max_gap_m, size_t count,
+                                        const std::function<bool(uint64_t)>& excluded) const override;
 
  private:
   const MapStore* const store_;

@@ -44,17 +44,24 @@ class MapSource {
   // Maps anchored in the collection's frame (a site map; anchor_index.h).
   struct Anchored {
     uint64_t map_id = 0;
-    Pose2 pose;     // the map's own frame in the collection's frame
-    Point2 lo, hi;  // its bounding box in the collection's frame
-    std::vector<Point2> path;  // where its robot drove (collection frame, about 1 m apart)
+    Pose2 pose;  // the map's own frame in the collection's frame
   };
   // The anchor of `map_id`, if it has one (default: no map is anchored).
   // Thread-safe.
   virtual std::optional<Pose2> AnchorOf(uint64_t /*map_id*/) const { return std::nullopt; }
   // Whether any map is anchored (default: none). Thread-safe.
   virtual bool HasAnchors() const { return false; }
-  // Anchored maps whose box meets the disk (collection frame). Thread-safe.
-  virtual std::vector<Anchored> AnchoredNear(const Point2& /*centre*/, double /*radius_m*/) const { return {}; }
+  // AnchorIndex::Near and AnchorIndex::NearestByPath over the anchored maps
+  // (default: none), those `excluded` names passed over. Thread-safe.
+  virtual std::vector<Anchored> AnchoredNear(const Point2& /*centre*/, double /*radius_m*/, size_t /*per_cell*/,
+                                             const std::function<bool(uint64_t)>& /*excluded*/) const {
+    return {};
+  }
+  virtual std::vector<Anchored> NearestAnchored(const std::vector<Point2>& /*path*/, double /*max_gap_m*/,
+                                                size_t /*count*/,
+                                                const std::function<bool(uint64_t)>& /*excluded*/) const {
+    return {};
+  }
 };
 
 }  // namespace lmd

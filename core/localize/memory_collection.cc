@@ -33,8 +33,15 @@ bool MemoryCollection::RouteOf(uint64_t map_id, Route* route) const {
 
 std::optional<Pose2> MemoryCollection::AnchorOf(uint64_t map_id) const { return anchors_.Anchor(map_id); }
 
-std::vector<MapSource::Anchored> MemoryCollection::AnchoredNear(const Point2& centre, double radius_m) const {
-  return anchors_.Near(centre, radius_m);
+std::vector<MapSource::Anchored> MemoryCollection::AnchoredNear(const Point2& centre, double radius_m, size_t per_cell,
+                                                                const std::function<bool(uint64_t)>& excluded) const {
+  return anchors_.Near(centre, radius_m, per_cell, excluded);
+}
+
+std::vector<MapSource::Anchored> MemoryCollection::NearestAnchored(const std::vector<Point2>& path, double max_gap_m,
+                                                                   size_t count,
+                                                                   const std::function<bool(uint64_t)>& excluded) const {
+  return anchors_.NearestByPath(path, max_gap_m, count, excluded);
 }
 
 bool MemoryCollection::SetAnchor(uint64_t id, const Pose2& pose) {

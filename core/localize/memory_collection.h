@@ -33,7 +33,10 @@ class MemoryCollection : public MapSource {
   bool RouteOf(uint64_t map_id, Route* route) const override;
   std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
   bool HasAnchors() const override { return anchors_.size() > 0; }
-  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m) const override;
+  std::vector<Anchored> AnchoredNear(const Point2& centre, double radius_m, size_t per_cell,
+                                     const std::function<bool(uint64_t)>& excluded) const override;
+  std::vector<Anchored> NearestAnchored(const std::vector<Point2>& path, double max_gap_m, size_t count,
+                                        const std::function<bool(uint64_t)>& excluded) const override;
 
   // Anchors a stored map in the collection's frame; false if not stored.
   bool SetAnchor(uint64_t id, const Pose2& pose);

@@ -31,37 +31,25 @@ constexpr size_t kPriorStageReads = 30000;
 // no place (served prior run, all logs: place@1 .948 -> .950 with 8).
 constexpr size_t kPriorPeaksPerMap = 2;
 constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
+// The first stage's maps near the prior: at most this many of each 10 m
+// cell, the newest (anchor_index.h). A bound on cost where a fleet piles up
+// maps; the busiest cell of the nine logs of ../shared/data holds 370, so it
+// changes nothing there.
+constexpr size_t kStageMapsPerCell = 512;
 
-// The maps whose robot drove nearest to where the query's did (at the prior)
-// -- they saw the same place from the same spots -- and of those the ones
-// whose grids could explain the query within the prior window best (the
-// search's own bound at its coarsest level), each with the pose the prior
-// implies in it. *match: the window that covers the prior.
+// Of the maps whose robot drove nearest to where the query's did (at the
+// prior) -- they saw the same place from the same spots -- the ones whose
+// grids could explain the query within the prior window best (the search's
+// own bound at its coarsest level), each with the pose the prior implies in
+// it. *match: the window that covers the prior.
 std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
-                                         const Prior& prior, const std::vector<MapSource::Anchored>& near,
+                                         const Prior& prior, const std::vector<MapSource::Anchored>& nearest,
                                          size_t maps, ScanMatchOptions* match) {
-  std::vector<Point2> path;
-  for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
-  if (path.empty()) path.push_back({prior.pose.x, prior.pose.y});
-  auto gap = [&](const MapSource::Anchored& a) {
-    double best = 1e300;
-    for (const Point2& q : path) {
-      for (const Point2& p : a.path) best = std::min(best, std::hypot(p.x - q.x, p.y - q.y));
-    }
-    return best;
-  };
-  std::vector<std::pair<double, size_t>> order;
-  for (size_t i = 0; i < near.size(); ++i) order.push_back({gap(near[i]), i});
-  std::sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : near[a.second].map_id < near[b.second].map_id;
-  });
-  if (order.size() > kBoundedPerMatched * maps) order.resize(kBoundedPerMatched * maps);
   *match = options.match;
   match->window_m = prior.radius_m + options.prior_margin_m;
   double window_deg = match->window_deg;
   std::vector<std::pair<double, Candidate>> bounded;
-  for (const auto& [g, i] : order) {
-    const MapSource::Anchored& a = near[i];
+  for (const MapSource::Anchored& a : nearest) {
     std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
     if (!db) continue;
     // At the turn the two compasses give (the heading is known modulo 90 deg
@@ -113,10 +101,10 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // Where the query's points can lie in the collection's frame.
   double reach = 0.0;
   for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
-  std::vector<MapSource::Anchored> near = source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach);
-  near.erase(std::remove_if(near.begin(), near.end(),
-                            [&](const MapSource::Anchored& a) { return excluded && excluded(a.map_id); }),
-             near.end());
+  // Where its robot drove, at the prior.
+  std::vector<Point2> path;
+  for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));
+  if (path.empty()) path.push_back({prior.pose.x, prior.pose.y});
   const double max_off_m = prior.radius_m + options.prior_margin_m;
   const double max_turn = 2 * prior.heading_sigma_rad + options.match.window_deg * M_PI / 180;
   auto inside = [&](uint64_t map_id, const Pose2& in_map) {
@@ -137,11 +125,18 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // of the nearest verified (LocalizeOptions::tight_prior_radius_m).
   const bool tight = options.prior_first_stage && prior.radius_m <= options.tight_prior_radius_m &&
                      prior.heading_sigma_rad <= options.tight_prior_sigma_deg * M_PI / 180;
+  const size_t maps = tight ? options.tight_prior_maps : options.prior_maps;
   ScanMatchOptions near_match;
-  const std::vector<Candidate> nearest = NearestCandidates(
-      query, source, options, prior, near, tight ? options.tight_prior_maps : options.prior_maps, &near_match);
+  const std::vector<Candidate> nearest =
+      NearestCandidates(query, source, options, prior,
+                        source.NearestAnchored(path, prior.radius_m + reach, kBoundedPerMatched * maps, excluded),
+                        maps, &near_match);
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
-  if (options.prior_first_stage && !tight && !near.empty()) {
+  const std::vector<MapSource::Anchored> near =
+      options.prior_first_stage && !tight
+          ? source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell, excluded)
+          : std::vector<MapSource::Anchored>{};
+  if (!near.empty()) {
     std::vector<uint64_t> ids;
     for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
     LocalizeOptions stage = options;
