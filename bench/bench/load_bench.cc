@@ -124,8 +124,10 @@ struct World {
   std::vector<std::vector<LocalMap>> robots;
 };
 
-// Robot 0's run through the demo world, and each robot's own route through it
-// (repeated if the route is short).
+// Robot 0's run through the demo world, and each robot's own route through
+// it, as long as the run: a route repeated from its start would teleport the
+// robot (its odometry cannot know) and have it send the very map it stored a
+// lap before.
 World SimulatedWorld(const LoadOptions& options, size_t ticks) {
   World world;
   world.seed = SimulateLocalMaps(DefaultDemoOptions());
@@ -133,10 +135,10 @@ World SimulatedWorld(const LoadOptions& options, size_t ticks) {
   for (int r = 0; r < options.robots; ++r) {
     SimulationOptions sim = DefaultDemoOptions();
     sim.route.seed = 1000 + options.first_robot + r;
-    sim.route.length_m = std::min<double>(static_cast<double>(ticks) + 6.0, 60.0);
-    const std::vector<LocalMap> maps = SimulateLocalMaps(sim);
-    world.robots.emplace_back();
-    for (size_t t = 0; t < ticks && !maps.empty(); ++t) world.robots.back().push_back(maps[t % maps.size()]);
+    sim.route.length_m = static_cast<double>(ticks) + 6.0;
+    std::vector<LocalMap> maps = SimulateLocalMaps(sim);
+    if (maps.size() > ticks) maps.resize(ticks);
+    world.robots.push_back(std::move(maps));
     progress.Add();
   }
   return world;
