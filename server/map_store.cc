@@ -136,7 +136,7 @@ void AnchorFromMetadata(uint64_t id, const v1::MapMetadata& meta, const v1::Loca
   }
   std::vector<Pose2> trajectory;
   for (const v1::Pose2& p : map.trajectory()) trajectory.push_back(FromProto(p));
-  anchors->Set(id, FromProto(meta.anchor().pose()), lo, hi, trajectory);
+  anchors->Set(id, FromProto(meta.anchor().pose()), lo, hi, trajectory, meta.anchor().derived());
 }
 
 // Writes of place features recomputed at open go out in batches of this many.

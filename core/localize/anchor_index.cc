@@ -11,6 +11,9 @@ namespace {
 constexpr double kBoxCellM = 10.0;  // grid of the maps' boxes
 constexpr double kPathCellM = 2.0;  // grid of the trajectories
 constexpr double kPathStepM = 1.0;  // spacing of the kept trajectory points
+// Maps whose robots drove within the same metre of the query's path show
+// about the same view: among them given anchors rank before derived ones.
+constexpr double kGapBandM = 1.0;
 
 double SquaredGap(const std::vector<Point2>& a, const std::vector<Point2>& b) {
   double best = 1e300;
@@ -39,18 +42,31 @@ std::vector<uint64_t> AnchorIndex::CellsOf(const Point2& lo, const Point2& hi, d
   return keys;
 }
 
-void AnchorIndex::Insert(Grid* grid, uint64_t key, uint64_t id) {
-  std::vector<uint64_t>& ids = (*grid)[key];
+void AnchorIndex::Insert(Grid* grid, uint64_t key, uint64_t id, bool derived) {
+  std::vector<uint64_t>& ids = (*grid)[key].ids[derived];
   ids.insert(std::upper_bound(ids.begin(), ids.end(), id), id);  // new maps have the highest ids: at the end
 }
 
-void AnchorIndex::Erase(Grid* grid, uint64_t key, uint64_t id) {
+void AnchorIndex::Erase(Grid* grid, uint64_t key, uint64_t id, bool derived) {
   const auto cell = grid->find(key);
   if (cell == grid->end()) return;
-  std::vector<uint64_t>& ids = cell->second;
+  std::vector<uint64_t>& ids = cell->second.ids[derived];
   const auto it = std::lower_bound(ids.begin(), ids.end(), id);
   if (it != ids.end() && *it == id) ids.erase(it);
-  if (ids.empty()) grid->erase(cell);
+  if (cell->second.ids[0].empty() && cell->second.ids[1].empty()) grid->erase(cell);
+}
+
+template <typename F>
+void AnchorIndex::ReadNewest(const Cell& cell, size_t per_kind, const std::function<bool(uint64_t)>& excluded,
+                             const F& f) {
+  for (const std::vector<uint64_t>& ids : cell.ids) {
+    size_t read = 0;
+    for (auto it = ids.rbegin(); it != ids.rend() && read < per_kind; ++it) {
+      if (excluded && excluded(*it)) continue;
+      ++read;
+      f(*it);
+    }
+  }
 }
 
 std::vector<uint64_t> AnchorIndex::PathCells(const Anchored& a) const {
@@ -62,9 +78,9 @@ std::vector<uint64_t> AnchorIndex::PathCells(const Anchored& a) const {
 }
 
 void AnchorIndex::Set(uint64_t id, const Pose2& pose, const Point2& min_corner, const Point2& max_corner,
-                      const std::vector<Pose2>& trajectory) {
+                      const std::vector<Pose2>& trajectory, bool derived) {
   Remove(id);
-  Anchored a{pose, {1e300, 1e300}, {-1e300, -1e300}, {}};
+  Anchored a{pose, {1e300, 1e300}, {-1e300, -1e300}, {}, derived};
   std::vector<Point2> path;
   for (const Pose2& p : trajectory) path.push_back(TransformPoint(pose, {p.x, p.y}));
   a.path = Thinned(path);
@@ -74,16 +90,17 @@ void AnchorIndex::Set(uint64_t id, const Pose2& pose, const Point2& min_corner, 
     a.lo = {std::min(a.lo.x, p.x), std::min(a.lo.y, p.y)};
     a.hi = {std::max(a.hi.x, p.x), std::max(a.hi.y, p.y)};
   }
-  for (uint64_t key : CellsOf(a.lo, a.hi, kBoxCellM)) Insert(&boxes_, key, id);
-  for (uint64_t key : PathCells(a)) Insert(&paths_, key, id);
+  for (uint64_t key : CellsOf(a.lo, a.hi, kBoxCellM)) Insert(&boxes_, key, id, derived);
+  for (uint64_t key : PathCells(a)) Insert(&paths_, key, id, derived);
   maps_[id] = std::move(a);
 }
 
 bool AnchorIndex::Remove(uint64_t id) {
   const auto it = maps_.find(id);
   if (it == maps_.end()) return false;
-  for (uint64_t key : CellsOf(it->second.lo, it->second.hi, kBoxCellM)) Erase(&boxes_, key, id);
-  for (uint64_t key : PathCells(it->second)) Erase(&paths_, key, id);
+  const bool derived = it->second.derived;
+  for (uint64_t key : CellsOf(it->second.lo, it->second.hi, kBoxCellM)) Erase(&boxes_, key, id, derived);
+  for (uint64_t key : PathCells(it->second)) Erase(&paths_, key, id, derived);
   maps_.erase(it);
   return true;
 }
@@ -101,14 +118,12 @@ std::vector<MapSource::Anchored> AnchorIndex::Near(const Point2& centre, double 
   for (uint64_t key : CellsOf({centre.x - r, centre.y - r}, {centre.x + r, centre.y + r}, kBoxCellM)) {
     const auto cell = boxes_.find(key);
     if (cell == boxes_.end()) continue;
-    size_t taken = 0;
-    for (auto it = cell->second.rbegin(); it != cell->second.rend() && taken < per_cell; ++it) {
-      if (excluded && excluded(*it)) continue;
-      const Anchored& a = maps_.at(*it);
+    ReadNewest(cell->second, per_cell, excluded, [&](uint64_t id) {
+      const Anchored& a = maps_.at(id);
       const double dx = std::max({a.lo.x - centre.x, 0.0, centre.x - a.hi.x});
       const double dy = std::max({a.lo.y - centre.y, 0.0, centre.y - a.hi.y});
-      if (dx * dx + dy * dy <= r * r) ids.push_back(*it), ++taken;
-    }
+      if (dx * dx + dy * dy <= r * r) ids.push_back(id);
+    });
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
@@ -131,12 +146,9 @@ std::vector<MapSource::Anchored> AnchorIndex::NearestByPath(const std::vector<Po
     if (!visited.insert(CellKey(cx, cy)).second) return;
     const auto cell = paths_.find(CellKey(cx, cy));
     if (cell == paths_.end()) return;
-    size_t taken = 0;
-    for (auto it = cell->second.rbegin(); it != cell->second.rend() && taken < count; ++it) {
-      if (excluded && excluded(*it)) continue;
-      ++taken;
-      if (gaps.count(*it) == 0) gaps[*it] = SquaredGap(path, maps_.at(*it).path);
-    }
+    ReadNewest(cell->second, count, excluded, [&](uint64_t id) {
+      if (gaps.count(id) == 0) gaps[id] = SquaredGap(path, maps_.at(id).path);
+    });
   };
   // Ring d: the cells d cells (Chebyshev) from a cell of the path. A map
   // first met in ring d is at least (d - 1) cells from the path, so one ring
@@ -152,16 +164,25 @@ std::vector<MapSource::Anchored> AnchorIndex::NearestByPath(const std::vector<Po
     }
     if (gaps.size() >= count && stop_after == last_ring) stop_after = std::min(last_ring, d + 1);
   }
-  std::vector<std::pair<double, uint64_t>> order;
-  for (const auto& [id, gap] : gaps) {
-    if (gap <= max_gap_m * max_gap_m) order.push_back({gap, id});
+  struct Ranked {
+    double band;  // whole metres of gap
+    bool derived;
+    double gap;
+    uint64_t id;
+  };
+  std::vector<Ranked> order;
+  for (const auto& [id, squared] : gaps) {
+    const double gap = std::sqrt(squared);
+    if (gap <= max_gap_m) order.push_back({std::floor(gap / kGapBandM), maps_.at(id).derived, gap, id});
   }
-  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
-    return a.first != b.first ? a.first < b.first : a.second > b.second;
+  std::sort(order.begin(), order.end(), [](const Ranked& a, const Ranked& b) {
+    if (a.band != b.band) return a.band < b.band;
+    if (a.derived != b.derived) return !a.derived;
+    return a.gap != b.gap ? a.gap < b.gap : a.id > b.id;
   });
   if (order.size() > count) order.resize(count);
   std::vector<MapSource::Anchored> out;
-  for (const auto& [gap, id] : order) out.push_back({id, maps_.at(id).pose});
+  for (const Ranked& r : order) out.push_back({r.id, maps_.at(r.id).pose});
   return out;
 }
 

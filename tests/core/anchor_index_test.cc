@@ -13,11 +13,11 @@ namespace lmd {
 namespace {
 
 // A map whose robot drove from (x, y) 4 m along +x, anchored there, its
-// points within 3 m of the path.
-void Drove(AnchorIndex* index, uint64_t id, double x, double y) {
+// points within 3 m of the path; `derived`: anchored by lmdd from a fix.
+void Drove(AnchorIndex* index, uint64_t id, double x, double y, bool derived = false) {
   std::vector<Pose2> trajectory;
   for (double s = 0; s <= 4.0; s += 0.25) trajectory.push_back({s, 0.0, 0.0});
-  index->Set(id, {x, y, 0.0}, {-3.0, -3.0}, {7.0, 3.0}, trajectory);
+  index->Set(id, {x, y, 0.0}, {-3.0, -3.0}, {7.0, 3.0}, trajectory, derived);
 }
 
 std::vector<uint64_t> Ids(const std::vector<MapSource::Anchored>& maps) {
@@ -41,6 +41,29 @@ TEST(AnchorIndexTest, NearestByPathRanksByTheGapBetweenTrajectories) {
             (std::vector<uint64_t>{3, 1}));
   EXPECT_TRUE(index.NearestByPath({}, 10.0, 10).empty());
   EXPECT_TRUE(index.NearestByPath(kQueryPath, std::nan(""), 10).empty());
+}
+
+// Within a metre the survey's maps (given anchors) come before those lmdd
+// anchored from fixes, however many newer ones the fleet stored.
+TEST(AnchorIndexTest, GivenAnchorsComeBeforeDerivedOnesEquallyNear) {
+  AnchorIndex index;
+  Drove(&index, 1, 0.0, 0.3);          // given, 0.3 m beside the query's path
+  Drove(&index, 2, 0.0, 1.6);          // given, 1.6 m
+  for (uint64_t id = 10; id < 500; ++id) Drove(&index, id, 0.0, 0.1, true);  // derived, 0.1 m
+  Drove(&index, 600, 0.0, 5.0, true);  // derived, 5 m
+  const std::vector<uint64_t> ids = Ids(index.NearestByPath(kQueryPath, 10.0, 4));
+  EXPECT_EQ(ids, (std::vector<uint64_t>{1, 499, 498, 497}));
+  const std::vector<uint64_t> more = Ids(index.NearestByPath(kQueryPath, 10.0, 600));
+  ASSERT_EQ(more.size(), 493u);  // all of them: 1, the 490 derived at 0.1 m, 2, 600
+  EXPECT_EQ(more[1], 499u);
+  EXPECT_EQ(more[490], 10u);
+  EXPECT_EQ(more[491], 2u);
+  EXPECT_EQ(more[492], 600u);
+  const std::vector<uint64_t> near = Ids(index.Near({1.0, 0.0}, 2.0, 3));
+  EXPECT_TRUE(std::find(near.begin(), near.end(), 1) != near.end());
+  EXPECT_TRUE(std::find(near.begin(), near.end(), 2) != near.end());
+  EXPECT_TRUE(std::find(near.begin(), near.end(), 499) != near.end());
+  EXPECT_TRUE(std::find(near.begin(), near.end(), 10) == near.end());
 }
 
 TEST(AnchorIndexTest, AMapWithoutTrajectoryStandsAtItsOrigin) {
