@@ -948,11 +948,7 @@ bool MapStore::HasAnchors(const std::string& collection) const {
 std::vector<MapSource::Anchored> MapStore::AnchoredNear(const std::string& collection, const Point2& centre,
                                                         double radius_m, size_t per_cell,
                                                         const std::unordered_set<std::string>& excluded) const {
-  const CollectionState* state = nullptr;
-  {
-    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
-    state = FindCollection(collection);
-  }
+  const CollectionState* state = StateOf(collection);
   if (state == nullptr) return {};
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
   return state->anchors.Near(centre, radius_m, per_cell, ExcludedFrom(*state, excluded));
@@ -962,14 +958,15 @@ std::vector<MapSource::Anchored> MapStore::NearestAnchored(const std::string& co
                                                            const std::vector<Point2>& path, double max_gap_m,
                                                            size_t count,
                                                            const std::unordered_set<std::string>& excluded) const {
-  const CollectionState* state = nullptr;
-  {
-    std::shared_lock<std::shared_mutex> lock(collections_mutex_);
-    state = FindCollection(collection);
-  }
+  const CollectionState* state = StateOf(collection);
   if (state == nullptr) return {};
   std::shared_lock<std::shared_mutex> index_lock(state->index_mutex);
   return state->anchors.NearestByPath(path, max_gap_m, count, ExcludedFrom(*state, excluded));
+}
+
+const CollectionState* MapStore::StateOf(const std::string& collection) const {
+  std::shared_lock<std::shared_mutex> lock(collections_mutex_);
+  return FindCollection(collection);
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {

@@ -248,6 +248,9 @@ class MapStore {
   // the store is open (dropped ones move to dropped_), so the pointer stays valid. The caller holds
   // collections_mutex_ (shared) or write_mutex_.
   CollectionState* FindCollection(const std::string& collection) const;
+  // FindCollection under collections_mutex_ (shared), for a reader that then
+  // takes the state's index_mutex.
+  const CollectionState* StateOf(const std::string& collection) const;
   // The counters of a collection about to be created. The caller holds write_mutex_.
   internal::CollectionRecord NewRecord(const std::string& collection) const;
   Result<internal::IndexedMap> ReadIndexed(const std::string& key) const;

@@ -1,7 +1,5 @@
 #include "server/store_map_source.h"
 
-#include <algorithm>
-
 #include "proto/convert.h"
 
 namespace lmd::server {
