@@ -139,6 +139,28 @@ TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
   EXPECT_GE(localized, asked - 2);  // the demo world repeats rooms: a few may stay unsure
 }
 
+// The maps a prior query excludes (by map id) are passed over where the
+// store picks the maps near the prior, and the maps beyond them answer.
+TEST_F(AnchoredQueryTest, APriorQueryPassesOverTheMapsItExcludes) {
+  for (size_t i = 30; i < kStored - 3; i += 45) {
+    const Pose2 truth = DemoMaps()[i + 1].truth.global_frame;
+    v1::RetrieveRequest request = Query(i);
+    *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 0.5, truth.y, truth.theta});
+    request.mutable_prior()->set_radius_m(1.0);
+    request.mutable_prior()->set_heading_sigma_rad(0.05);
+    v1::RetrieveResponse first;
+    ASSERT_TRUE(server_->client().Retrieve(request, &first).ok());
+    ASSERT_GT(first.hits_size(), 0) << i;
+    for (const v1::MapHit& hit : first.hits()) request.add_exclude_map_ids(hit.map_id());
+    v1::RetrieveResponse second;
+    ASSERT_TRUE(server_->client().Retrieve(request, &second).ok());
+    EXPECT_GT(second.hits_size(), 0) << i;
+    for (const v1::MapHit& hit : second.hits()) {
+      for (const v1::MapHit& excluded : first.hits()) EXPECT_NE(hit.map_id(), excluded.map_id()) << i;
+    }
+  }
+}
+
 TEST_F(AnchoredQueryTest, AWrongPriorSaysSoAndMayFallBackToAGlobalQuery) {
   const Pose2 truth = DemoMaps()[31].truth.global_frame;
   v1::RetrieveRequest request = Query(30);
