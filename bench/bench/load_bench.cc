@@ -190,6 +190,7 @@ struct FleetRobot {
   // Sure and wrong, by how it was asked, and those off by less than 1 m
   // (the right place at a slightly wrong pose).
   size_t wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
+  std::vector<size_t> failed_ticks;  // its ticks whose prior failed (scored after the run)
 };
 
 constexpr size_t kSequenceStepTicks = 3;
@@ -228,6 +229,7 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   ++robot->asked;
   robot->by_prior += verdict.prior_used();
   robot->prior_failed += verdict.prior_failed();
+  if (verdict.prior_failed()) robot->failed_ticks.push_back(t);
   robot->by_sequence += verdict.sequence_maps() > 0;
   const bool posed = verdict.has_collection_pose();
   const Pose2 got = posed ? FromProto(verdict.collection_pose()) : Pose2{};
@@ -250,22 +252,38 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   }
 }
 
-void PrintFleet(const std::vector<FleetRobot>& fleet) {
+// Whether a stored (seeded) map shows `map`'s place: half of its points
+// within 0.3 m of the seed's, in the world frame (PlaceOverlap), looked for
+// among the seeds that start within 20 m of it.
+bool SeededPlace(const LocalMap& map, const std::vector<LocalMap>& seed) {
+  const Pose2& at = map.truth.global_frame;
+  for (const LocalMap& s : seed) {
+    const Pose2& o = s.truth.global_frame;
+    if (std::hypot(o.x - at.x, o.y - at.y) < 20.0 && PlaceOverlap(map, s) >= 0.5) return true;
+  }
+  return false;
+}
+
+void PrintFleet(const std::vector<FleetRobot>& fleet, const std::vector<LocalMap>& seed,
+                const std::vector<std::vector<LocalMap>>& robot_maps) {
   FleetRobot all;
-  for (const FleetRobot& r : fleet) {
+  size_t failed_seeded = 0;  // failed priors where a seeded map shows the place
+  for (size_t i = 0; i < fleet.size(); ++i) {
+    const FleetRobot& r = fleet[i];
     all.asked += r.asked, all.right += r.right, all.sure += r.sure, all.sure_wrong += r.sure_wrong;
     all.sure_unposed += r.sure_unposed;
     all.wrong_by_prior += r.wrong_by_prior, all.wrong_by_sequence += r.wrong_by_sequence;
     all.wrong_within_1m += r.wrong_within_1m;
     all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.prior_failed += r.prior_failed;
+    for (size_t t : r.failed_ticks) failed_seeded += SeededPlace(robot_maps[i][t], seed);
   }
   const double n = std::max<double>(1.0, static_cast<double>(all.asked));
   std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg), sure %zu (%.3f), "
               "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
-              "%zu; by prior %zu (of them failed %zu), by sequence %zu, global %zu\n",
+              "%zu; by prior %zu (of them failed %zu, %zu at a place a seeded map shows), by sequence %zu, global %zu\n",
               all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
-              all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed,
-              all.by_prior, all.prior_failed, all.by_sequence, all.asked - all.by_prior - all.by_sequence);
+              all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed, all.by_prior, all.prior_failed,
+              failed_seeded, all.by_sequence, all.asked - all.by_prior - all.by_sequence);
 }
 
 }  // namespace
@@ -415,7 +433,7 @@ int RunLoadBench(int argc, char** argv) {
       detects_ok > 0 ? static_cast<double>(reduced.load()) / static_cast<double>(detects_ok.load()) : 0.0;
   std::printf("lmdd was busy and answered %ld of %ld DetectChanges at its reduced depth (%.3f)\n", reduced.load(),
               detects_ok.load(), reduced_share);
-  if (options.fleet) PrintFleet(fleet);
+  if (options.fleet) PrintFleet(fleet, base, robot_maps);
   if (options.json) {
     std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld, "
                 "\"place_at_1\": %.4f, \"reduced_depth\": %.4f}\n",
