@@ -70,11 +70,18 @@ class AnchoredQueryTest : public ::testing::Test {
     return request;
   }
 
-  // Query(i) with a prior at `pose`, radius 2 m.
-  v1::RetrieveResponse PriorQuery(size_t i, const Pose2& pose) const {
+  // Query(i) with a prior at `pose` (heading sigma 0: unset).
+  v1::RetrieveRequest PriorRequest(size_t i, const Pose2& pose, double radius_m, double sigma_rad = 0.0) const {
     v1::RetrieveRequest request = Query(i);
     *request.mutable_prior()->mutable_pose() = ToProto(pose);
-    request.mutable_prior()->set_radius_m(2.0);
+    request.mutable_prior()->set_radius_m(radius_m);
+    if (sigma_rad > 0) request.mutable_prior()->set_heading_sigma_rad(sigma_rad);
+    return request;
+  }
+
+  // Query(i) with a prior at `pose`, radius 2 m.
+  v1::RetrieveResponse PriorQuery(size_t i, const Pose2& pose) const {
+    const v1::RetrieveRequest request = PriorRequest(i, pose, 2.0);
     v1::RetrieveResponse response;
     EXPECT_TRUE(server_->client().Retrieve(request, &response).ok());
     return response;
@@ -121,10 +128,7 @@ TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
   int localized = 0, asked = 0;
   for (size_t i = 12; i < kStored - 3; i += 21) {
     const Pose2 truth = DemoMaps()[i + 1].truth.global_frame;
-    v1::RetrieveRequest request = Query(i);
-    *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 1.5, truth.y - 1.0, truth.theta + 0.25});
-    request.mutable_prior()->set_radius_m(3.0);
-    request.mutable_prior()->set_heading_sigma_rad(0.3);
+    const v1::RetrieveRequest request = PriorRequest(i, {truth.x + 1.5, truth.y - 1.0, truth.theta + 0.25}, 3.0, 0.3);
     v1::RetrieveResponse response;
     ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
     ++asked;
@@ -144,10 +148,7 @@ TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
 TEST_F(AnchoredQueryTest, APriorQueryPassesOverTheMapsItExcludes) {
   for (size_t i = 30; i < kStored - 3; i += 45) {
     const Pose2 truth = DemoMaps()[i + 1].truth.global_frame;
-    v1::RetrieveRequest request = Query(i);
-    *request.mutable_prior()->mutable_pose() = ToProto(Pose2{truth.x + 0.5, truth.y, truth.theta});
-    request.mutable_prior()->set_radius_m(1.0);
-    request.mutable_prior()->set_heading_sigma_rad(0.05);
+    v1::RetrieveRequest request = PriorRequest(i, {truth.x + 0.5, truth.y, truth.theta}, 1.0, 0.05);
     v1::RetrieveResponse first;
     ASSERT_TRUE(server_->client().Retrieve(request, &first).ok());
     ASSERT_GT(first.hits_size(), 0) << i;
