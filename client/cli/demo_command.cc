@@ -130,6 +130,10 @@ int DemoCommand(const CommandContext& ctx) {
   Pose2 fix;               // robot 2's last sure pose in the site frame
   const LocalMap* fixed_at = nullptr;  // ... and the map it was of
   int right = 0, sure = 0, sure_wrong = 0, change_found = 0, asked = 0, revisits = 0;
+  // Why the others missed: no hit, a place robot 1 never mapped, or a wrong
+  // pose lmdd was not sure of (of those, how many were turned by 45 deg or
+  // more: the simulated building's corridors and rooms repeat by 90 deg).
+  int no_hit = 0, new_place = 0, unsure_lookalike = 0, turned = 0;
   bool pictured = false;
   for (size_t n = 0; n < sends.size(); ++n) {
     const size_t index = sends[n];
@@ -181,6 +185,7 @@ int DemoCommand(const CommandContext& ctx) {
     if (verdict.fell_back_to_global()) std::printf(" (failed: answered globally)");
     if (response.hits_size() == 0 || !response.hits(0).hit().has_collection_pose()) {
       std::printf("\n           no hit%s\n", seen ? "" : " (a place robot 1 never mapped)");
+      ++no_hit;
       lost = true;
       site.fixes.push_back({truth, FixOutcome::kUnsure, std::to_string(n + 1)});
       continue;
@@ -192,6 +197,11 @@ int DemoCommand(const CommandContext& ctx) {
     right += pose_right;
     sure += verdict.localized();
     sure_wrong += verdict.localized() && !pose_right;
+    if (!pose_right && !verdict.localized() && !seen) ++new_place;
+    if (!pose_right && !verdict.localized() && seen) {
+      ++unsure_lookalike;
+      turned += error_deg >= 45.0;
+    }
     std::printf("\n           top hit %-10s score %.3f, %s; site pose error %.2f m %.1f deg: %s%s\n",
                 top.map_id().c_str(), top.score(), verdict.localized() ? "sure" : "NOT sure", error_m, error_deg,
                 pose_right ? "right" : seen ? "WRONG" : "new place",
@@ -252,6 +262,9 @@ int DemoCommand(const CommandContext& ctx) {
   std::printf("\nsummary: %d/%d of robot 2's maps at the right place and pose (0.2 m, 1 deg; %d show a place robot 1 "
               "had mapped); lmdd was sure of %d, %d of them wrong; true change in the first mask for %d/%d\n",
               right, asked, revisits, sure, sure_wrong, change_found, asked);
+  std::printf("misses: %d with no hit, %d at places robot 1 never mapped, %d wrong poses lmdd was not sure of (%d of "
+              "them turned by 45 deg or more: look-alike corridors), %d sure and wrong\n",
+              no_hit, new_place, unsure_lookalike, turned, sure_wrong);
   return 0;
 }
 

@@ -243,6 +243,19 @@ TEST_F(LmdctlTest, TheDemoRelocalisesRobotTwoAndIsNeverSureAndWrong) {
   EXPECT_GT(sent, 10);
   EXPECT_GT(sure, 0);
   EXPECT_EQ(sure_wrong, 0) << demo.out;
+  // Every miss has its reason, and each reason is counted once.
+  int no_hit = 0, new_place = 0, unsure = 0, turned = 0, sure_wrong_again = 0;
+  const size_t misses = demo.out.find("misses: ", at);
+  ASSERT_NE(misses, std::string::npos) << demo.out;
+  ASSERT_EQ(std::sscanf(demo.out.c_str() + misses,
+                        "misses: %d with no hit, %d at places robot 1 never mapped, %d wrong poses lmdd was not sure "
+                        "of (%d of them turned by 45 deg or more: look-alike corridors), %d sure and wrong",
+                        &no_hit, &new_place, &unsure, &turned, &sure_wrong_again),
+            5)
+      << demo.out;
+  EXPECT_EQ(right + no_hit + new_place + unsure + sure_wrong_again, sent) << demo.out;
+  EXPECT_LE(turned, unsure);
+  EXPECT_EQ(sure_wrong_again, sure_wrong);
   // After the first sure fix robot 2 tracks with priors: no map after it is lost again.
   const size_t first_prior = demo.out.find(" prior, ");
   ASSERT_NE(first_prior, std::string::npos) << demo.out;
