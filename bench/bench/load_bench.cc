@@ -190,7 +190,13 @@ struct FleetRobot {
   // Sure and wrong, by how it was asked, and those off by less than 1 m
   // (the right place at a slightly wrong pose).
   size_t wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
-  std::vector<size_t> failed_ticks;  // its ticks whose prior failed (scored after the run)
+  // Each answered tick, whether its pose was right and its prior failed
+  // (whether a seeded map shows the place is scored after the run).
+  struct Answer {
+    size_t tick = 0;
+    bool right = false, prior_failed = false;
+  };
+  std::vector<Answer> answers;
 };
 
 constexpr size_t kSequenceStepTicks = 3;
@@ -229,7 +235,6 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   ++robot->asked;
   robot->by_prior += verdict.prior_used();
   robot->prior_failed += verdict.prior_failed();
-  if (verdict.prior_failed()) robot->failed_ticks.push_back(t);
   robot->by_sequence += verdict.sequence_maps() > 0;
   const bool posed = verdict.has_collection_pose();
   const Pose2 got = posed ? FromProto(verdict.collection_pose()) : Pose2{};
@@ -237,6 +242,7 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   const bool right = posed && std::hypot(got.x - truth.x, got.y - truth.y) <= 0.2 &&
                      std::abs(std::remainder(got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
   robot->right += right;
+  robot->answers.push_back({t, right, verdict.prior_failed()});
   robot->sure += verdict.localized();
   const bool sure_wrong = verdict.localized() && posed && !right;
   robot->sure_wrong += sure_wrong;
@@ -252,22 +258,32 @@ void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesR
   }
 }
 
-// Whether a stored (seeded) map shows `map`'s place: half of its points
-// within 0.3 m of the seed's, in the world frame (PlaceOverlap), looked for
-// among the seeds that start within 20 m of it.
-bool SeededPlace(const LocalMap& map, const std::vector<LocalMap>& seed) {
-  const Pose2& at = map.truth.global_frame;
-  for (const LocalMap& s : seed) {
-    const Pose2& o = s.truth.global_frame;
-    if (std::hypot(o.x - at.x, o.y - at.y) < 20.0 && PlaceOverlap(map, s) >= 0.5) return true;
+// Whether a seeded map shows a place (PlaceOverlap >= 0.5), among the seeds
+// that start within 20 m of it. The seeds are gridded once, as every answer
+// of a run is scored.
+class SeededPlaces {
+ public:
+  explicit SeededPlaces(const std::vector<LocalMap>& seed) {
+    for (const LocalMap& s : seed) places_.push_back({s.truth.global_frame, PlaceOf(s)});
   }
-  return false;
-}
+  bool Shows(const LocalMap& map) const {
+    const Pose2& at = map.truth.global_frame;
+    for (const auto& [origin, place] : places_) {
+      if (std::hypot(origin.x - at.x, origin.y - at.y) < 20.0 && place.Overlap(map) >= 0.5) return true;
+    }
+    return false;
+  }
+
+ private:
+  std::vector<std::pair<Pose2, PlaceOf>> places_;
+};
 
 void PrintFleet(const std::vector<FleetRobot>& fleet, const std::vector<LocalMap>& seed,
                 const std::vector<std::vector<LocalMap>>& robot_maps) {
   FleetRobot all;
-  size_t failed_seeded = 0;  // failed priors where a seeded map shows the place
+  const SeededPlaces seeded(seed);
+  // Answers where a seeded map shows the place: all, right, failed priors.
+  size_t at_seeded = 0, right_seeded = 0, failed_seeded = 0;
   for (size_t i = 0; i < fleet.size(); ++i) {
     const FleetRobot& r = fleet[i];
     all.asked += r.asked, all.right += r.right, all.sure += r.sure, all.sure_wrong += r.sure_wrong;
@@ -275,13 +291,18 @@ void PrintFleet(const std::vector<FleetRobot>& fleet, const std::vector<LocalMap
     all.wrong_by_prior += r.wrong_by_prior, all.wrong_by_sequence += r.wrong_by_sequence;
     all.wrong_within_1m += r.wrong_within_1m;
     all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.prior_failed += r.prior_failed;
-    for (size_t t : r.failed_ticks) failed_seeded += SeededPlace(robot_maps[i][t], seed);
+    for (const FleetRobot::Answer& a : r.answers) {
+      if (!seeded.Shows(robot_maps[i][a.tick])) continue;
+      ++at_seeded, right_seeded += a.right, failed_seeded += a.prior_failed;
+    }
   }
   const double n = std::max<double>(1.0, static_cast<double>(all.asked));
-  std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg), sure %zu (%.3f), "
+  std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg; at places a seeded map "
+              "shows %zu of %zu, %.3f), sure %zu (%.3f), "
               "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
               "%zu; by prior %zu (of them failed %zu, %zu at a place a seeded map shows), by sequence %zu, global %zu\n",
-              all.asked, all.right, all.right / n, all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
+              all.asked, all.right, all.right / n, right_seeded, at_seeded,
+              static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
               all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed, all.by_prior, all.prior_failed,
               failed_seeded, all.by_sequence, all.asked - all.by_prior - all.by_sequence);
 }

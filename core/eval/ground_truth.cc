@@ -214,11 +214,16 @@ std::vector<RelevantPair> FindRelevantPairs(const std::vector<LocalMap>& maps, c
 }
 
 double PlaceOverlap(const LocalMap& query, const LocalMap& db, double radius_m) {
+  return PlaceOf(db, radius_m).Overlap(query);
+}
+
+PlaceOf::PlaceOf(const LocalMap& db, double radius_m) : radius_m_(radius_m), grid_(ToGlobal(db), radius_m) {}
+
+double PlaceOf::Overlap(const LocalMap& query) const {
   const std::vector<Point2> q = ToGlobal(query);
   if (q.empty()) return 0.0;
-  const PointGrid grid(ToGlobal(db), radius_m);
   size_t within = 0;
-  for (const Point2& p : q) within += grid.AnyWithin(p, radius_m) ? 1 : 0;
+  for (const Point2& p : q) within += grid_.AnyWithin(p, radius_m_) ? 1 : 0;
   return static_cast<double>(within) / static_cast<double>(q.size());
 }
 

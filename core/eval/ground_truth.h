@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/eval/point_grid.h"
 #include "core/types.h"
 
 namespace lmd {
@@ -44,5 +45,17 @@ std::vector<Point2> ToGlobal(const LocalMap& map);
 // Fraction of the query's points (global frame) within radius_m of some point
 // of db (global frame); 0 if the query has no points.
 double PlaceOverlap(const LocalMap& query, const LocalMap& db, double radius_m = 0.3);
+
+// PlaceOverlap against one stored map, its points gridded once, for scoring
+// many queries against it.
+class PlaceOf {
+ public:
+  explicit PlaceOf(const LocalMap& db, double radius_m = 0.3);
+  double Overlap(const LocalMap& query) const;
+
+ private:
+  double radius_m_;
+  PointGrid grid_;
+};
 
 }  // namespace lmd
