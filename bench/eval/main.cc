@@ -35,6 +35,10 @@ void Usage(std::FILE* out) {
                "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
                "      maps within 10 m of each excluded);\n"
                "      all three (and --anchor) insert every map with its log pose as pose_hint.\n"
+               "  prior-misses [--log FILE...] [--one-pose]\n"
+               "      in process, the --mode prior queries whose top hit misses the place, by why: a map of\n"
+               "      the place lmdd did not verify, out-scored by another hit, or matched away from the truth\n"
+               "      within the prior's window. About 3 min for the nine logs on 2 cores.\n"
                "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
                "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
                "  export --log FILE... --out DIR\n"
@@ -54,6 +58,7 @@ int main(int argc, char** argv) {
   if (command == "retrieval") return lmd::eval::RunRetrieval(argc - 2, argv + 2);
   if (command == "export") return lmd::eval::RunExport(argc - 2, argv + 2);
   if (command == "served") return lmd::eval::RunServed(argc - 2, argv + 2);
+  if (command == "prior-misses") return lmd::eval::RunPriorMisses(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);
   return 2;

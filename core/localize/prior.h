@@ -23,6 +23,15 @@ struct Prior {
 // not positive (or beyond 100 m), a negative or non-finite heading sigma.
 Status ValidatePrior(const Prior& prior);
 
+// The pose of `query`'s own frame in stored map `db`, anchored at `anchor`,
+// that `prior` implies. Its heading is snapped to the turn the two maps'
+// compasses give (the heading is known modulo 90 deg to a fraction of a
+// degree) when that turn lies within the prior's heading uncertainty
+// widened by `window_deg` (*snapped true); else it is the prior's, and a
+// search must cover the prior's whole heading range.
+Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
+                 double window_deg, bool* snapped);
+
 // Localises `query` near `prior` among `source`'s anchored maps (the prior
 // disk grown by the query's own extent). Hits carry collection_pose. The
 // verdict's rivals are the other maps' disagreeing hits and the best map at
