@@ -78,8 +78,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options) {
     bool truth_better = false;      // a place map scores higher at the truth than where it matched
     for (size_t j : q.places) {
       const PreparedMap& db = *collection.Prepared(j);
-      ScanMatchOptions match = options.match;
-      match.window_m = prior.radius_m + options.prior_margin_m;
+      ScanMatchOptions match = PriorWindow(prior, options);
       bool snapped = false;
       const Pose2 guess = PriorGuess(query, db, d.maps[j].truth.global_frame, prior, match.window_deg, &snapped);
       if (!snapped) match.window_deg += 2 * prior.heading_sigma_rad * 180 / M_PI;

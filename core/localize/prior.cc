@@ -45,8 +45,7 @@ constexpr size_t kStageMapsPerCell = 512;
 std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                                          const Prior& prior, const std::vector<MapSource::Anchored>& nearest,
                                          size_t maps, ScanMatchOptions* match) {
-  *match = options.match;
-  match->window_m = prior.radius_m + options.prior_margin_m;
+  *match = PriorWindow(prior, options);
   double window_deg = match->window_deg;
   std::vector<std::pair<double, Candidate>> bounded;
   for (const MapSource::Anchored& a : nearest) {
@@ -108,6 +107,13 @@ std::vector<LocalizedHit> NextBestPoses(const LocalQuery& query, const std::vect
 }
 
 }  // namespace
+
+ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options) {
+  ScanMatchOptions match = options.match;
+  match.window_m = prior.radius_m + options.prior_margin_m;
+  if (options.prior_weak_fits) match.correlative.min_score = 0.0;
+  return match;
+}
 
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
                  double window_deg, bool* snapped) {

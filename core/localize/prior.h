@@ -23,6 +23,11 @@ struct Prior {
 // not positive (or beyond 100 m), a negative or non-finite heading sigma.
 Status ValidatePrior(const Prior& prior);
 
+// How the maps nearest `prior` are scan matched: options.match in a window
+// of the prior's radius plus prior_margin_m, with no min_score when
+// prior_weak_fits.
+ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options);
+
 // The pose of `query`'s own frame in stored map `db`, anchored at `anchor`,
 // that `prior` implies. Its heading is snapped to the turn the two maps'
 // compasses give (the heading is known modulo 90 deg to a fraction of a

@@ -108,6 +108,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   near_options.prior_maps = options.sequence_prior_maps;
   near_options.prior_first_stage = false;  // the hypotheses came from it
   near_options.prior_second_pose = false;  // a hypothesis names the pose; its window is the drift's
+  near_options.prior_weak_fits = false;
   for (Hypothesis& h : hypotheses) {
     if (stop && stop()) break;
     Prior at;

@@ -341,6 +341,45 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   EXPECT_GT(higher, 0u) << "of " << queries;  // 4 of 147 when written
 }
 
+// The maps nearest a prior are searched for their best pose however weak: a
+// stored map that saw only the west end of a hall explains a small share of
+// a query that saw all of it, too small for the search's min_score, yet it
+// shows where the query is.
+TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
+  std::vector<Segment> walls;
+  AddBox(&walls, 0, 0, 40, 6);
+  AddBox(&walls, 1.0, 0.6, 1.8, 1.6);  // a cupboard in the west end: the corner is not symmetric
+  const World hall(std::move(walls), {});
+  std::vector<Pose2> west_end, middle;
+  for (double x = 3.0; x <= 4.0; x += 0.25) west_end.push_back({x, 3.0, M_PI});
+  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
+  const LocalMap stored = ScannedMap(hall, west_end, 180.0, 11);
+  const LocalMap map = ScannedMap(hall, middle, 360.0, 12);
+  MemoryCollection collection;
+  ASSERT_TRUE(collection.Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
+  ASSERT_TRUE(collection.SetAnchor(1, stored.truth.global_frame));
+  const LocalQuery query = PrepareLocalQuery(map, kOptions);
+  const Pose2 truth = map.truth.global_frame;
+  Prior loose;
+  loose.pose = {truth.x + 1.5, truth.y - 1.0, truth.theta + 12 * M_PI / 180};
+  loose.radius_m = 3.5;
+  loose.heading_sigma_rad = 20.0 * M_PI / 180;
+  LocalizeOptions nearest_only = kOptions;  // the first stage would find it too
+  nearest_only.prior_first_stage = false;
+  LocalizeOptions strict = nearest_only;
+  strict.prior_weak_fits = false;
+  const Localization weak = LocalizeNear(query, collection, nearest_only, loose);
+  const Localization kept = LocalizeNear(query, collection, strict, loose);
+  ASSERT_FALSE(weak.hits.empty());
+  ASSERT_TRUE(weak.verdict.collection_pose);
+  EXPECT_LT(TranslationError(*weak.verdict.collection_pose, truth), 0.1);
+  EXPECT_LT(AngleErrorDeg(*weak.verdict.collection_pose, truth), 0.5);
+  EXPECT_LT(weak.hits[0].score, kOptions.confidence.min_score);  // a weak fit: not sure, yet the right pose
+  // Above min_score only, the search found nothing and the pose stayed at the prior's guess.
+  ASSERT_TRUE(kept.verdict.collection_pose);
+  EXPECT_GT(TranslationError(*kept.verdict.collection_pose, truth), 0.5);
+}
+
 // Score = overlap - conflict - reverse conflict (weights 1); hits best first,
 // at most top_k, each with the prepared map it was matched against.
 TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {
