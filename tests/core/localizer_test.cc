@@ -53,6 +53,25 @@ void Store(const std::vector<size_t>& ids, MemoryCollection* collection) {
   for (size_t i : ids) ASSERT_TRUE(collection->Add(i, DemoPlace(i), MapSource::Route{1, i + 1}).ok()) << i;
 }
 
+// The demo maps `ids` as Store does, each anchored at its true pose with
+// its trajectory (a site map).
+void StoreAnchored(const std::vector<size_t>& ids, MemoryCollection* collection) {
+  for (size_t i : ids) {
+    ASSERT_TRUE(collection->Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok()) << i;
+    ASSERT_TRUE(collection->SetAnchor(i, DemoMaps()[i].truth.global_frame)) << i;
+  }
+}
+
+// A prior `off` the true pose (metres, metres, degrees) with its radius and
+// heading sigma (degrees).
+Prior PriorOff(const Pose2& truth, const Pose2& off, double radius_m, double sigma_deg) {
+  Prior prior;
+  prior.pose = {truth.x + off.x, truth.y + off.y, truth.theta + off.theta * M_PI / 180};
+  prior.radius_m = radius_m;
+  prior.heading_sigma_rad = sigma_deg * M_PI / 180;
+  return prior;
+}
+
 // The map seen from a frame placed at `pose` in its own frame (points,
 // trajectory and scans): the returned map's own frame is `pose` in `map`'s.
 LocalMap MovedCopy(const LocalMap& map, const Pose2& pose) {
@@ -226,10 +245,7 @@ TEST(LocalizerTest, TheSitePoseComesFromAnAgreeingAnchoredHitWhenTheBestHasNone)
 // maps whose robots drove nearest, which need not show the view best.
 TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   MemoryCollection collection;
-  for (size_t i : EveryThirdMap()) {
-    ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
-    ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
-  }
+  StoreAnchored(EveryThirdMap(), &collection);
   size_t compared = 0;
   for (size_t q = 13; q < DemoMaps().size(); q += 12) {
     const LocalMap newest_map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
@@ -267,25 +283,15 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
 // site frame.
 TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
   MemoryCollection collection;
-  for (size_t i : EveryThirdMap()) {
-    ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
-    ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
-  }
+  StoreAnchored(EveryThirdMap(), &collection);
   size_t right_tight = 0, right_loose = 0, queries = 0, more_matched = 0;
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
     const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
-    Prior tight;
-    tight.pose = {truth.x + 0.2, truth.y - 0.1, truth.theta + 1.5 * M_PI / 180};
-    tight.radius_m = 0.4;
-    tight.heading_sigma_rad = 3.0 * M_PI / 180;
-    Prior loose_heading = tight;
-    loose_heading.heading_sigma_rad = 20.0 * M_PI / 180;
-    Prior loose;
-    loose.pose = {truth.x + 1.5, truth.y - 1.0, truth.theta + 12 * M_PI / 180};
-    loose.radius_m = 3.5;
-    loose.heading_sigma_rad = 20.0 * M_PI / 180;
+    const Prior tight = PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 3.0);
+    const Prior loose_heading = PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 20.0);
+    const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
     const Localization a = LocalizeNear(query, collection, kOptions, tight);
     const Localization b = LocalizeNear(query, collection, kOptions, loose);
     const Localization c = LocalizeNear(query, collection, kOptions, loose_heading);
@@ -313,10 +319,7 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
 // (a shift of a map can explain the query better than its first pose).
 TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   MemoryCollection collection;
-  for (size_t i : EveryThirdMap()) {
-    ASSERT_TRUE(collection.Add(i, DemoPlace(i), MapSource::Route{1, i + 1}, DemoMaps()[i].trajectory).ok());
-    ASSERT_TRUE(collection.SetAnchor(i, DemoMaps()[i].truth.global_frame));
-  }
+  StoreAnchored(EveryThirdMap(), &collection);
   LocalizeOptions one_pose = kOptions;
   one_pose.prior_second_pose = false;
   size_t queries = 0, higher = 0;
@@ -324,10 +327,7 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
     const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
-    Prior loose;
-    loose.pose = {truth.x - 1.0, truth.y + 2.0, truth.theta - 15 * M_PI / 180};
-    loose.radius_m = 3.5;
-    loose.heading_sigma_rad = 20.0 * M_PI / 180;
+    const Prior loose = PriorOff(truth, {-1.0, 2.0, -15.0}, 3.5, 20.0);
     const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
     const Localization two = LocalizeNear(query, collection, kOptions, loose, excluded);
     const Localization one = LocalizeNear(query, collection, one_pose, loose, excluded);
@@ -360,10 +360,7 @@ TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
   ASSERT_TRUE(collection.SetAnchor(1, stored.truth.global_frame));
   const LocalQuery query = PrepareLocalQuery(map, kOptions);
   const Pose2 truth = map.truth.global_frame;
-  Prior loose;
-  loose.pose = {truth.x + 1.5, truth.y - 1.0, truth.theta + 12 * M_PI / 180};
-  loose.radius_m = 3.5;
-  loose.heading_sigma_rad = 20.0 * M_PI / 180;
+  const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
   LocalizeOptions nearest_only = kOptions;  // the first stage would find it too
   nearest_only.prior_first_stage = false;
   LocalizeOptions strict = nearest_only;
