@@ -14,7 +14,7 @@ int RunRetrieval(int argc, char** argv);
 int RunExport(int argc, char** argv);
 // lmd-eval served [--log FILE...] [--out DIR] [--server HOST:PORT | --lmdd PATH] [--max-queries N] ...
 int RunServed(int argc, char** argv);
-// lmd-eval prior-misses [--log FILE...] [--one-pose]
+// lmd-eval prior-misses [--log FILE...] [--one-pose] [--tracking]
 int RunPriorMisses(int argc, char** argv);
 
 }  // namespace lmd::eval

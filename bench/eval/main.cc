@@ -35,7 +35,7 @@ void Usage(std::FILE* out) {
                "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
                "      maps within 10 m of each excluded);\n"
                "      all three (and --anchor) insert every map with its log pose as pose_hint.\n"
-               "  prior-misses [--log FILE...] [--one-pose]\n"
+               "  prior-misses [--log FILE...] [--one-pose] [--tracking]\n"
                "      in process, the --mode prior queries whose top hit misses the place, by why: a map of\n"
                "      the place lmdd did not verify, out-scored by another hit, or matched away from the truth\n"
                "      within the prior's window. About 3 min for the nine logs on 2 cores.\n"

@@ -4,7 +4,7 @@
 // stored, anchored at its true pose with its trajectory; each map with a
 // place (a stored map outside its 10 m of travel shows it) is asked with
 // its true pose off by 1-3 m and 10-20 deg (lmd-eval served --mode prior's
-// noise, seeded by the map's index). A miss is a top hit that does not show
+// noise, seeded by the map's index; --tracking: --mode tracking's). A miss is a top hit that does not show
 // the place. For each miss, every stored map that shows the place is
 // scan matched where the prior puts it (the window lmdd searches) and the
 // miss is put in one of three classes:
@@ -47,7 +47,7 @@ struct MissCounts {
   size_t asked = 0, missed = 0, not_verified = 0, out_scored = 0, shifted = 0, shifted_truth_better = 0;
 };
 
-MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options) {
+MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const PoseNoise& noise) {
   MissCounts counts;
   counts.name = d.name;
   std::vector<PreparedPlace> places;
@@ -67,9 +67,9 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options) {
     const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &places[q.map]);
     std::mt19937_64 rng(q.map + 1);
     Prior prior;
-    prior.pose = PerturbedPose(d.maps[q.map].truth.global_frame, kRoughPrior, rng);
-    prior.radius_m = kRoughPrior.radius_m;
-    prior.heading_sigma_rad = kRoughPrior.sigma_deg * M_PI / 180;
+    prior.pose = PerturbedPose(d.maps[q.map].truth.global_frame, noise, rng);
+    prior.radius_m = noise.radius_m;
+    prior.heading_sigma_rad = noise.sigma_deg * M_PI / 180;
     const Localization answer = LocalizeNear(query, collection, options, prior, excluded);
     if (!answer.hits.empty() && d.ShowsPlace(q, answer.hits[0].map_id)) continue;
     ++counts.missed;
@@ -114,7 +114,7 @@ void Print(const MissCounts& c) {
 
 int RunPriorMisses(int argc, char** argv) {
   Args args;
-  if (!args.Parse(argc, argv, 0, {"one-pose"})) {
+  if (!args.Parse(argc, argv, 0, {"one-pose", "tracking"})) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;
   }
@@ -135,7 +135,7 @@ int RunPriorMisses(int argc, char** argv) {
       std::fprintf(stderr, "lmd-eval prior-misses: %s\n", d.status().message().c_str());
       return 1;
     }
-    all.push_back(CountMisses(*d, options));
+    all.push_back(CountMisses(*d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));
   }
   std::printf("%-12s %6s %6s %8s %13s %11s %8s %21s\n", "log", "asked", "missed", "place@1", "not verified",
               "out-scored", "shifted", "(truth scores higher)");
