@@ -41,8 +41,8 @@ struct CollectionState {
   // first. A writer (holding MapStore::write_mutex_, as every writer of it
   // does) may read it without index_mutex.
   std::map<uint64_t, std::string> map_ids;
-  // Map id -> index id: a request's excluded maps, by index id, once per
-  // request instead of a look-up in map_ids per stored feature read.
+  // Map id -> index id: a request's excluded maps turned into index ids once
+  // per store call instead of a look-up in map_ids per stored feature read.
   std::unordered_map<std::string, uint64_t> index_ids;
 
   void Name(uint64_t id, const std::string& map_id) {

@@ -302,9 +302,10 @@ void PrintFleet(const std::vector<FleetRobot>& fleet, const std::vector<LocalMap
               "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
               "%zu; by prior %zu (of them failed %zu, %zu at a place a seeded map shows), by sequence %zu, global %zu\n",
               all.asked, all.right, all.right / n, right_seeded, at_seeded,
-              static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), all.sure, all.sure / n, all.sure_wrong, all.wrong_by_prior,
-              all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed, all.by_prior, all.prior_failed,
-              failed_seeded, all.by_sequence, all.asked - all.by_prior - all.by_sequence);
+              static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), all.sure, all.sure / n,
+              all.sure_wrong, all.wrong_by_prior, all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed,
+              all.by_prior, all.prior_failed, failed_seeded, all.by_sequence,
+              all.asked - all.by_prior - all.by_sequence);
 }
 
 }  // namespace

@@ -4,10 +4,10 @@
 // stored, anchored at its true pose with its trajectory; each map with a
 // place (a stored map outside its 10 m of travel shows it) is asked with
 // its true pose off by 1-3 m and 10-20 deg (lmd-eval served --mode prior's
-// noise, seeded by the map's index; --tracking: --mode tracking's). A miss is a top hit that does not show
-// the place. For each miss, every stored map that shows the place is
-// scan matched where the prior puts it (the window lmdd searches) and the
-// miss is put in one of three classes:
+// noise, seeded by the map's index; --tracking: --mode tracking's). A miss
+// is a top hit that does not show the place. For each miss, every stored
+// map that shows the place is scan matched where the prior puts it (the
+// window lmdd searches) and the miss is put in one of three classes:
 //   not verified  one of them matches within 0.5 m of the truth and scores
 //                 at least the answer's top hit: lmdd did not pick it to verify;
 //   out-scored    one matches near the truth, but below the answer's top hit
@@ -79,9 +79,8 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const P
     for (size_t j : q.places) {
       const PreparedMap& db = *collection.Prepared(j);
       ScanMatchOptions match = PriorWindow(prior, options);
-      bool snapped = false;
-      const Pose2 guess = PriorGuess(query, db, d.maps[j].truth.global_frame, prior, match.window_deg, &snapped);
-      if (!snapped) match.window_deg += 2 * prior.heading_sigma_rad * 180 / M_PI;
+      const Pose2 guess =
+          PriorGuess(query, db, d.maps[j].truth.global_frame, prior, match.window_deg, &match.window_deg);
       const LocalizedHit hit =
           localize_internal::Scored(query, db, MatchLocalMaps(query.match, db, {guess}, match), options);
       const Pose2 truth = d.TruePose(q.map, j);

@@ -51,9 +51,9 @@ std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSourc
   for (const MapSource::Anchored& a : nearest) {
     std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
     if (!db) continue;
-    bool snapped = false;
-    const Pose2 guess = PriorGuess(query, *db, a.pose, prior, match->window_deg, &snapped);
-    if (!snapped) window_deg = std::max(window_deg, (2 * prior.heading_sigma_rad) * 180 / M_PI + match->window_deg);
+    double needed_deg = 0.0;
+    const Pose2 guess = PriorGuess(query, *db, a.pose, prior, match->window_deg, &needed_deg);
+    window_deg = std::max(window_deg, needed_deg);
     SearchRegion region;
     region.theta = guess.theta;
     region.centroid_target = TransformPoint(guess, query.match.centroid);
@@ -116,13 +116,15 @@ ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options)
 }
 
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
-                 double window_deg, bool* snapped) {
+                 double window_deg, double* search_window_deg) {
   Pose2 guess = Compose(Inverse(anchor), prior.pose);
   const double quarter = M_PI / 2;
   const double compass = db.heading - query.map->heading;
   const double turn = compass + quarter * std::round(std::remainder(guess.theta - compass, 2 * M_PI) / quarter);
-  *snapped = std::abs(std::remainder(turn - guess.theta, 2 * M_PI)) <= 2 * prior.heading_sigma_rad + window_deg * M_PI / 180;
-  if (*snapped) guess.theta = turn;
+  const bool snapped =
+      std::abs(std::remainder(turn - guess.theta, 2 * M_PI)) <= 2 * prior.heading_sigma_rad + window_deg * M_PI / 180;
+  if (snapped) guess.theta = turn;
+  *search_window_deg = snapped ? window_deg : window_deg + 2 * prior.heading_sigma_rad * 180 / M_PI;
   return guess;
 }
 

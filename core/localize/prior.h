@@ -29,13 +29,14 @@ Status ValidatePrior(const Prior& prior);
 ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options);
 
 // The pose of `query`'s own frame in stored map `db`, anchored at `anchor`,
-// that `prior` implies. Its heading is snapped to the turn the two maps'
-// compasses give (the heading is known modulo 90 deg to a fraction of a
-// degree) when that turn lies within the prior's heading uncertainty
-// widened by `window_deg` (*snapped true); else it is the prior's, and a
-// search must cover the prior's whole heading range.
+// that `prior` implies, and the heading window (deg, either side) a search
+// from it needs. Its heading is snapped to the turn the two maps' compasses
+// give (the heading is known modulo 90 deg to a fraction of a degree) when
+// that turn lies within the prior's heading uncertainty widened by
+// `window_deg`, and the window stays `window_deg`; else the heading is the
+// prior's and the window covers the prior's whole heading range.
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
-                 double window_deg, bool* snapped);
+                 double window_deg, double* search_window_deg);
 
 // Localises `query` near `prior` among `source`'s anchored maps (the prior
 // disk grown by the query's own extent). Hits carry collection_pose. The
