@@ -140,30 +140,47 @@ void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options) {
   std::vector<Candidate> candidates;
-  std::vector<MapSource::Route> chosen_routes;
+  struct Chosen {
+    MapSource::Route route;
+    std::optional<Pose2> anchor;
+    size_t candidate;
+  };
+  std::vector<Chosen> chosen;
   std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; kPassed: passed over
   constexpr size_t kPassed = static_cast<size_t>(-1);
+  // Where a chosen map's guesses put the query on the site: a route
+  // neighbour anchored too repeats it only when it puts the query there as well.
+  auto same_place = [&](const Chosen& c, const Pose2& site) {
+    for (const Pose2& g : candidates[c.candidate].guesses) {
+      const Pose2 other = Compose(*c.anchor, g);
+      if (std::hypot(other.x - site.x, other.y - site.y) <= options.route_same_place_m) return true;
+    }
+    return false;
+  };
   for (size_t r = 0; r < hypotheses.size(); ++r) {
     const PlaceHypothesis& h = hypotheses[r];
+    const Pose2 guess = HypothesisPose(h, query.map->heading);
     auto it = at.find(h.map_id);
     if (it == at.end()) {
       if (candidates.size() >= options.verify_maps) continue;
       MapSource::Route route;
       const bool known = options.maps_per_route_window > 0 && source.RouteOf(h.map_id, &route);
+      const std::optional<Pose2> anchor = known ? source.AnchorOf(h.map_id) : std::nullopt;
       size_t near = 0;
-      for (const MapSource::Route& c : chosen_routes) {
-        const uint64_t gap = c.sequence > route.sequence ? c.sequence - route.sequence : route.sequence - c.sequence;
-        near += known && c.robot == route.robot && gap <= options.route_window;
+      for (const Chosen& c : chosen) {
+        const uint64_t gap = c.route.sequence > route.sequence ? c.route.sequence - route.sequence : route.sequence - c.route.sequence;
+        if (!known || c.route.robot != route.robot || gap > options.route_window) continue;
+        near += options.route_same_place_m <= 0 || !anchor || !c.anchor || same_place(c, Compose(*anchor, guess));
       }
       if (known && near >= options.maps_per_route_window) {
         at.emplace(h.map_id, kPassed);
         continue;
       }
-      if (known) chosen_routes.push_back(route);
       it = at.emplace(h.map_id, candidates.size()).first;
+      if (known) chosen.push_back({route, anchor, candidates.size()});
       candidates.push_back({h.map_id, {}, h.votes, r});
     }
-    if (it->second != kPassed) candidates[it->second].guesses.push_back(HypothesisPose(h, query.map->heading));
+    if (it->second != kPassed) candidates[it->second].guesses.push_back(guess);
   }
   return candidates;
 }

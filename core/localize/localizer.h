@@ -52,6 +52,13 @@ struct LocalizeOptions {
   // right place or a rival unverified). 0 = no limit.
   size_t route_window = 4;
   size_t maps_per_route_window = 1;
+  // ... in a site map (both maps anchored), only when its hypothesis puts
+  // the query within this of a chosen neighbour's guess: a neighbour that
+  // names another place is no repeat (its map may show the place where the
+  // chosen one's votes named a look-alike stretch). 0: the route alone.
+  // Decided on the tuning logs (lmd-eval global-misses --anchored; served
+  // --mode sequence), see docs/results.md.
+  double route_same_place_m = 2.0;
   // Window around each hypothesis; the index's guess already gives the turn.
   ScanMatchOptions match = [] {
     ScanMatchOptions m;

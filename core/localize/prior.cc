@@ -196,6 +196,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     stage.search.max_candidates = kPriorStageReads;
     stage.search.min_candidates_per_map = 0;  // the prior's maps are few whatever the collection holds
     stage.verify_maps = options.prior_maps;
+    stage.route_same_place_m = 0;  // inside the prior every hypothesis names one place: routes alone decide
     const auto t = std::chrono::steady_clock::now();
     std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, stage.search, excluded, &out.stats.search);
     out.stats.search_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();

@@ -15,6 +15,7 @@
 #include "core/localize/memory_collection.h"
 #include "core/localize/prior.h"
 #include "core/localize/sequence.h"
+#include "core/localize/verification.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
 #include "core/sim/change.h"
@@ -474,6 +475,48 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
     EXPECT_LT(TranslationError(top.pose, TruePose(query, DemoMaps()[top.map_id])), 0.05);
     EXPECT_LT(AngleErrorDeg(top.pose, TruePose(query, DemoMaps()[top.map_id])), 0.3);
   }
+}
+
+// In a site map a route neighbour is passed over only when it repeats the
+// chosen map's place: its hypothesis putting the query within
+// route_same_place_m of a chosen neighbour's guess on the site. One naming
+// another place (the chosen map's votes may name a look-alike stretch) is
+// verified too. Without anchors the route alone decides, as before.
+TEST(LocalizerTest, ARouteNeighbourNamingAnotherSitePlaceIsVerifiedToo) {
+  MemoryCollection site, unanchored;
+  StoreAnchored({100, 101}, &site);
+  Store({100, 101}, &unanchored);
+  const LocalQuery query = PrepareLocalQuery(DemoMaps()[120], kOptions, &DemoPlace(120));
+  // A hypothesis that puts the query's own frame at `site_xy` through map
+  // `id`'s anchor (no turn: the db heading is the query's).
+  auto hypothesis_at = [&](uint64_t id, const Point2& site_xy) {
+    const Pose2 in_db = Compose(Inverse(DemoMaps()[id].truth.global_frame), Pose2{site_xy.x, site_xy.y, 0.0});
+    const double c = std::cos(query.map->heading), s = std::sin(query.map->heading);
+    PlaceHypothesis h;
+    h.map_id = id;
+    h.db_heading = query.map->heading;
+    h.translation = {c * in_db.x + s * in_db.y, -s * in_db.x + c * in_db.y};  // in_db turned by -heading
+    h.votes = 10;
+    return h;
+  };
+  const Pose2 a = DemoMaps()[100].truth.global_frame;
+  const Point2 place{a.x + 1.0, a.y};
+  const Point2 beside{place.x + kOptions.route_same_place_m * 0.5, place.y};
+  const Point2 elsewhere{place.x + kOptions.route_same_place_m * 3, place.y};
+  auto verified = [&](const MapSource& source, const Point2& second) {
+    return localize_internal::ChooseCandidates(query, source, {hypothesis_at(100, place), hypothesis_at(101, second)},
+                                               kOptions).size();
+  };
+  EXPECT_EQ(verified(site, beside), 1u);
+  EXPECT_EQ(verified(site, elsewhere), 2u);
+  EXPECT_EQ(verified(unanchored, elsewhere), 1u);
+  // The guess verified is where the hypothesis put the query.
+  const auto chosen = localize_internal::ChooseCandidates(query, site, {hypothesis_at(100, place)}, kOptions);
+  ASSERT_EQ(chosen.size(), 1u);
+  ASSERT_EQ(chosen[0].guesses.size(), 1u);
+  const Pose2 on_site = Compose(a, chosen[0].guesses[0]);
+  EXPECT_NEAR(on_site.x, place.x, 1e-9);
+  EXPECT_NEAR(on_site.y, place.y, 1e-9);
 }
 
 // The same queries with their place stored (every third map) and with every
