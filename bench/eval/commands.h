@@ -16,5 +16,6 @@ int RunExport(int argc, char** argv);
 int RunServed(int argc, char** argv);
 // lmd-eval prior-misses [--log FILE...] [--one-pose] [--tracking]
 int RunPriorMisses(int argc, char** argv);
+int RunGlobalMisses(int argc, char** argv);
 
 }  // namespace lmd::eval

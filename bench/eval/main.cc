@@ -40,6 +40,11 @@ void Usage(std::FILE* out) {
                "      the place lmdd did not verify, out-scored by another hit, or matched away from the truth\n"
                "      within the prior's window (--tracking: --mode tracking's priors). About 75 s for the\n"
                "      nine logs on 2 cores.\n"
+               "  global-misses [--log FILE...] [--every N] [--anchored]\n"
+               "      in process, the global queries (every Nth) whose top hit misses the place, by why: the\n"
+               "      truth scores no higher, or where the first stage and verification lost it; --anchored:\n"
+               "      the maps stored anchored at their log poses (a site map). About 2.5 min for the nine\n"
+               "      logs on 2 cores, 50 s with --every 3.\n"
                "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
                "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
                "  export --log FILE... --out DIR\n"
@@ -60,6 +65,7 @@ int main(int argc, char** argv) {
   if (command == "export") return lmd::eval::RunExport(argc - 2, argv + 2);
   if (command == "served") return lmd::eval::RunServed(argc - 2, argv + 2);
   if (command == "prior-misses") return lmd::eval::RunPriorMisses(argc - 2, argv + 2);
+  if (command == "global-misses") return lmd::eval::RunGlobalMisses(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);
   return 2;
