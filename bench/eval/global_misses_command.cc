@@ -45,6 +45,7 @@ constexpr const char* kClassNames[kClasses] = {"truth loses", "verified near", "
 struct MissCounts {
   std::string name;
   size_t asked = 0, missed = 0;
+  size_t matched = 0;  // maps scan matched, over all queries asked
   std::array<size_t, kClasses> by_class{};
 };
 
@@ -106,26 +107,24 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
     auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
     const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &places[q.map]);
-    // SearchAndVerify's steps, kept apart to see what each of them chose.
     LocalizeStats stats;
-    const std::vector<PlaceHypothesis> hypotheses =
-        collection.Search(query.features, options.search, excluded, &stats.search);
-    const std::vector<Candidate> verified =
-        localize_internal::ChooseCandidates(query, collection, hypotheses, options);
+    localize_internal::SearchTrace trace;
     const std::vector<LocalizedHit> hits =
-        localize_internal::VerifyCandidates(query, collection, verified, options, options.match, {}, &stats);
+        localize_internal::SearchAndVerify(query, collection, options, excluded, {}, &stats, &trace);
+    counts.matched += stats.maps_matched;
     if (!hits.empty() && d.ShowsPlace(q, hits[0].map_id)) continue;
     ++counts.missed;
-    ++counts.by_class[Classify(d, q, query, collection, hypotheses, verified, hits.empty() ? 0.0 : hits[0].score,
-                               options)];
+    ++counts.by_class[Classify(d, q, query, collection, trace.hypotheses, trace.verified,
+                               hits.empty() ? 0.0 : hits[0].score, options)];
   }
   bar.Done();
   return counts;
 }
 
 void Print(const MissCounts& c) {
-  std::printf("%-10s %6zu %6zu %8.3f", c.name.c_str(), c.asked, c.missed,
-              1.0 - static_cast<double>(c.missed) / std::max<size_t>(1, c.asked));
+  const double asked = static_cast<double>(std::max<size_t>(1, c.asked));
+  std::printf("%-10s %6zu %8.1f %6zu %8.3f", c.name.c_str(), c.asked, static_cast<double>(c.matched) / asked, c.missed,
+              1.0 - static_cast<double>(c.missed) / asked);
   for (size_t n : c.by_class) std::printf(" %15zu", n);
   std::printf("\n");
 }
@@ -165,14 +164,14 @@ int RunGlobalMisses(int argc, char** argv) {
     }
     all.push_back(CountMisses(*d, options, args.Has("anchored"), every));
   }
-  std::printf("%-10s %6s %6s %8s", "log", "asked", "missed", "place@1");
+  std::printf("%-10s %6s %8s %6s %8s", "log", "asked", "matched", "missed", "place@1");
   for (const char* name : kClassNames) std::printf(" %15s", name);
   std::printf("\n");
   MissCounts total;
   total.name = "all";
   for (const MissCounts& c : all) {
     Print(c);
-    total.asked += c.asked, total.missed += c.missed;
+    total.asked += c.asked, total.missed += c.missed, total.matched += c.matched;
     for (size_t i = 0; i < kClasses; ++i) total.by_class[i] += c.by_class[i];
   }
   Print(total);

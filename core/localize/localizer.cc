@@ -138,7 +138,8 @@ void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits
 }
 
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
-                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options) {
+                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
+                                        std::vector<PassedOver>* passed) {
   std::vector<Candidate> candidates;
   struct Chosen {
     MapSource::Route route;
@@ -147,6 +148,7 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
   };
   std::vector<Chosen> chosen;
   std::unordered_map<uint64_t, size_t> at;  // map id -> candidate index; kPassed: passed over
+  std::unordered_map<uint64_t, size_t> passed_at;  // map id -> index in *passed
   constexpr size_t kPassed = static_cast<size_t>(-1);
   // Where a chosen map's guesses put the query on the site: a route
   // neighbour anchored too repeats it only when it puts the query there as well.
@@ -166,34 +168,77 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
       MapSource::Route route;
       const bool known = options.maps_per_route_window > 0 && source.RouteOf(h.map_id, &route);
       const std::optional<Pose2> anchor = known ? source.AnchorOf(h.map_id) : std::nullopt;
-      size_t near = 0;
+      std::vector<uint64_t> near;
       for (const Chosen& c : chosen) {
         const uint64_t gap = c.route.sequence > route.sequence ? c.route.sequence - route.sequence : route.sequence - c.route.sequence;
         if (!known || c.route.robot != route.robot || gap > options.route_window) continue;
-        near += options.route_same_place_m <= 0 || !anchor || !c.anchor || same_place(c, Compose(*anchor, guess));
+        if (options.route_same_place_m <= 0 || !anchor || !c.anchor || same_place(c, Compose(*anchor, guess))) {
+          near.push_back(candidates[c.candidate].map_id);
+        }
       }
-      if (known && near >= options.maps_per_route_window) {
+      if (known && near.size() >= options.maps_per_route_window) {
         at.emplace(h.map_id, kPassed);
+        if (passed) {
+          passed_at.emplace(h.map_id, passed->size());
+          passed->push_back({{h.map_id, {guess}, h.votes, r}, std::move(near)});
+        }
         continue;
       }
       it = at.emplace(h.map_id, candidates.size()).first;
       if (known) chosen.push_back({route, anchor, candidates.size()});
       candidates.push_back({h.map_id, {}, h.votes, r});
     }
-    if (it->second != kPassed) candidates[it->second].guesses.push_back(guess);
+    if (it->second != kPassed) {
+      candidates[it->second].guesses.push_back(guess);
+    } else if (passed) {
+      (*passed)[passed_at.at(h.map_id)].candidate.guesses.push_back(guess);
+    }
   }
   return candidates;
 }
 
+std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed, const std::vector<LocalizedHit>& hits,
+                                            const LocalizeOptions& options) {
+  std::unordered_map<uint64_t, double> score_of;
+  for (const LocalizedHit& h : hits) score_of[h.map_id] = h.score;
+  std::vector<Candidate> retried;
+  for (const PassedOver& p : passed) {
+    if (retried.size() >= options.passed_over_retries) break;
+    const bool failed = std::all_of(p.for_maps.begin(), p.for_maps.end(), [&](uint64_t id) {
+      const auto it = score_of.find(id);
+      return it == score_of.end() || it->second < options.confidence.min_score;
+    });
+    if (failed) retried.push_back(p.candidate);
+  }
+  return retried;
+}
+
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
-                                          const std::function<bool()>& stop, LocalizeStats* stats) {
+                                          const std::function<bool()>& stop, LocalizeStats* stats,
+                                          SearchTrace* trace) {
   const auto t = Clock::now();
-  const std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
+  std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
   stats->hypotheses = hypotheses.size();
   stats->search_ms += MsSince(t);
-  const std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options);
-  return VerifyCandidates(query, source, candidates, options, options.match, stop, stats);
+  std::vector<PassedOver> passed;
+  std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed);
+  const size_t matched_before = stats->maps_matched;
+  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, options.match, stop, stats);
+  const bool stopped = stats->maps_matched - matched_before < candidates.size();  // (or maps deleted meanwhile)
+  std::vector<Candidate> retried = stopped ? std::vector<Candidate>{} : PassedOverFailedFits(passed, hits, options);
+  if (!retried.empty()) {
+    for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, options.match, stop, stats)) {
+      hits.push_back(std::move(hit));
+    }
+    SortHits(&hits);
+  }
+  if (trace) {
+    trace->hypotheses = std::move(hypotheses);
+    trace->verified = std::move(candidates);
+    for (Candidate& c : retried) trace->verified.push_back(std::move(c));
+  }
+  return hits;
 }
 
 }  // namespace localize_internal

@@ -59,6 +59,9 @@ struct LocalizeOptions {
   // Decided on the tuning logs (lmd-eval global-misses --anchored; served
   // --mode sequence), see docs/results.md.
   double route_same_place_m = 2.0;
+  // Maps passed over whose chosen neighbours all fit worse than
+  // confidence.min_score are verified after all, this many at most.
+  size_t passed_over_retries = 5;
   // Window around each hypothesis; the index's guess already gives the turn.
   ScanMatchOptions match = [] {
     ScanMatchOptions m;

@@ -24,11 +24,25 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
 
+// A map passed over for chosen route neighbours, with its guesses.
+struct PassedOver {
+  Candidate candidate;
+  std::vector<uint64_t> for_maps;  // the chosen neighbours it was passed over for
+};
+
 // The maps to verify (at most options.verify_maps), in order of their best
 // hypothesis, each with all its hypotheses as guesses; route neighbours of
-// chosen maps passed over.
+// chosen maps passed over (into `passed`, when given, in the same order).
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
-                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options);
+                                        const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
+                                        std::vector<PassedOver>* passed = nullptr);
+
+// The first options.passed_over_retries of `passed` whose chosen neighbours
+// all fit worse than confidence.min_score in `hits` (or were not matched):
+// passing a map over assumes its neighbour shows what it shows, and a
+// neighbour that fits that badly did not.
+std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed, const std::vector<LocalizedHit>& hits,
+                                            const LocalizeOptions& options);
 
 // Best first: score, then the closer fit, then the map id.
 void SortHits(std::vector<LocalizedHit>* hits);
@@ -41,11 +55,19 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
                                            const ScanMatchOptions& match, const std::function<bool()>& stop,
                                            LocalizeStats* stats);
 
+// What SearchAndVerify chose (lmd-eval global-misses reads it).
+struct SearchTrace {
+  std::vector<PlaceHypothesis> hypotheses;  // the first stage's
+  std::vector<Candidate> verified;          // chosen, then retried (PassedOverFailedFits)
+};
+
 // The first stage and the verification of the maps it names (route
-// neighbours passed over), best hits first: Localize without its verdict.
+// neighbours passed over, those of failed fits retried), best hits first:
+// Localize without its verdict. `trace` (optional) receives its choices.
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
-                                          const std::function<bool()>& stop, LocalizeStats* stats);
+                                          const std::function<bool()>& stop, LocalizeStats* stats,
+                                          SearchTrace* trace = nullptr);
 
 // The best hit refined, the verdict (with `second_pose`, when set and the
 // verdict would be sure: the best map's score at another pose, a rival),

@@ -445,9 +445,10 @@ TEST(LocalizerTest, AStopTrueFromTheStartMatchesNothing) {
 
 // A place the robots passed often collects votes from many maps of one
 // route; verifying one map per route window leaves the other slots to other
-// places. With routes, at most 8 of 40 consecutive maps can be verified
-// (each chosen map passes over its neighbours within route_window = 4);
-// without, verify_maps = 20 are.
+// places. With routes, at most 8 of 40 consecutive maps can be chosen
+// (each chosen map passes over its neighbours within route_window = 4), and
+// passed_over_retries more verified where the chosen fit badly; without,
+// verify_maps = 20 are.
 TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
   std::vector<size_t> ids;
   for (size_t i = 100; i < 140; ++i) ids.push_back(i);
@@ -460,8 +461,11 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
   const LocalMap query = MovedCopy(DemoMaps()[q], KnownMoves()[3]);
   const Localization with = LocalizeIn(one_route, query);
   const Localization without = LocalizeIn(no_routes, query);
-  EXPECT_LE(with.stats.maps_matched, 8u);
+  EXPECT_LE(with.stats.maps_matched, 8u + kOptions.passed_over_retries);
   EXPECT_LT(with.stats.maps_matched, without.stats.maps_matched);
+  LocalizeOptions no_retries = kOptions;
+  no_retries.passed_over_retries = 0;
+  EXPECT_LE(LocalizeIn(one_route, query, no_retries).stats.maps_matched, 8u);
   EXPECT_EQ(without.stats.maps_matched, kOptions.verify_maps);
   // maps_per_route_window = 0 switches it off.
   LocalizeOptions unlimited = kOptions;
@@ -517,6 +521,54 @@ TEST(LocalizerTest, ARouteNeighbourNamingAnotherSitePlaceIsVerifiedToo) {
   const Pose2 on_site = Compose(a, chosen[0].guesses[0]);
   EXPECT_NEAR(on_site.x, place.x, 1e-9);
   EXPECT_NEAR(on_site.y, place.y, 1e-9);
+}
+
+// A map passed over for a route neighbour gets its own chance when every
+// neighbour it was passed over for fit worse than confidence.min_score: the
+// pass-over assumed they show what it shows, and they did not.
+TEST(LocalizerTest, AMapPassedOverForNeighboursThatFitBadlyIsVerifiedAfterAll) {
+  MemoryCollection route;
+  Store({100, 101, 102, 110}, &route);  // 100-102 route neighbours; 110 beyond route_window
+  const LocalQuery query = PrepareLocalQuery(DemoMaps()[120], kOptions, &DemoPlace(120));
+  auto hypothesis = [](uint64_t id, double x, double votes) {
+    PlaceHypothesis h;
+    h.map_id = id;
+    h.translation = {x, 0.0};
+    h.votes = votes;
+    return h;
+  };
+  std::vector<localize_internal::PassedOver> passed;
+  const std::vector<localize_internal::Candidate> chosen = localize_internal::ChooseCandidates(
+      query, route,
+      {hypothesis(100, 0, 9), hypothesis(101, 1, 8), hypothesis(110, 2, 7), hypothesis(101, 3, 6), hypothesis(102, 4, 5)},
+      kOptions, &passed);
+  ASSERT_EQ(chosen.size(), 2u);  // 100 and 110
+  ASSERT_EQ(passed.size(), 2u);  // 101 (with both its guesses), then 102, each for 100
+  EXPECT_EQ(passed[0].candidate.map_id, 101u);
+  EXPECT_EQ(passed[0].candidate.guesses.size(), 2u);
+  EXPECT_EQ(passed[0].for_maps, std::vector<uint64_t>{100});
+  EXPECT_EQ(passed[1].candidate.map_id, 102u);
+
+  auto hit = [](uint64_t id, double score) {
+    LocalizedHit h;
+    h.map_id = id;
+    h.score = score;
+    return h;
+  };
+  const double fits = kOptions.confidence.min_score;
+  auto retried = [&](const std::vector<LocalizedHit>& hits, const LocalizeOptions& options) {
+    std::vector<uint64_t> ids;
+    for (const auto& c : localize_internal::PassedOverFailedFits(passed, hits, options)) ids.push_back(c.map_id);
+    return ids;
+  };
+  EXPECT_TRUE(retried({hit(100, fits), hit(110, 0.1)}, kOptions).empty());  // 100 shows its place
+  EXPECT_EQ(retried({hit(100, fits - 0.01), hit(110, 0.9)}, kOptions), (std::vector<uint64_t>{101, 102}));
+  EXPECT_EQ(retried({hit(110, 0.9)}, kOptions), (std::vector<uint64_t>{101, 102}));  // 100 never matched (stopped)
+  LocalizeOptions one = kOptions;
+  one.passed_over_retries = 1;
+  EXPECT_EQ(retried({hit(100, 0.2)}, one), std::vector<uint64_t>{101});
+  one.passed_over_retries = 0;
+  EXPECT_TRUE(retried({hit(100, 0.2)}, one).empty());
 }
 
 // The same queries with their place stored (every third map) and with every
