@@ -95,7 +95,8 @@ struct ServerConfig {
   // Under load, queries trade depth for time. A Retrieve or DetectChanges of
   // the default method that starts while at least `busy_queued_calls` calls
   // wait for a worker scan matches `busy_verify_candidates` maps (if less than
-  // verify_candidates), and says so in its response (reduced_depth). A
+  // verify_candidates; no route neighbours retried, LocalizeOptions::
+  // passed_over_retries), and says so in its response (reduced_depth). A
   // request that names its own verify_candidates is not reduced. 0: never.
   uint32_t busy_queued_calls = 4;
   uint32_t busy_verify_candidates = 5;

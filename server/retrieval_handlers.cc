@@ -183,6 +183,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
                       runner_->pool().queued() >= config_.busy_queued_calls;
     if (busy && config_.busy_verify_candidates < options.verify_maps) {
       options.verify_maps = config_.busy_verify_candidates;
+      options.passed_over_retries = 0;  // retries are depth too
       query.reduced_depth = true;
     }
     if (busy && config_.busy_search_candidates > 0 &&
