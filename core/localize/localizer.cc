@@ -170,7 +170,8 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
       const std::optional<Pose2> anchor = known ? source.AnchorOf(h.map_id) : std::nullopt;
       std::vector<uint64_t> near;
       for (const Chosen& c : chosen) {
-        const uint64_t gap = c.route.sequence > route.sequence ? c.route.sequence - route.sequence : route.sequence - c.route.sequence;
+        const uint64_t gap =
+            c.route.sequence > route.sequence ? c.route.sequence - route.sequence : route.sequence - c.route.sequence;
         if (!known || c.route.robot != route.robot || gap > options.route_window) continue;
         if (options.route_same_place_m <= 0 || !anchor || !c.anchor || same_place(c, Compose(*anchor, guess))) {
           near.push_back(candidates[c.candidate].map_id);
@@ -197,8 +198,8 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
   return candidates;
 }
 
-std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed, const std::vector<LocalizedHit>& hits,
-                                            const LocalizeOptions& options) {
+std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed,
+                                            const std::vector<LocalizedHit>& hits, const LocalizeOptions& options) {
   std::unordered_map<uint64_t, double> score_of;
   for (const LocalizedHit& h : hits) score_of[h.map_id] = h.score;
   std::vector<Candidate> retried;
@@ -213,6 +214,30 @@ std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passe
   return retried;
 }
 
+std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
+                                          const std::vector<PlaceHypothesis>& hypotheses,
+                                          const LocalizeOptions& options, const ScanMatchOptions& match,
+                                          const std::function<bool()>& stop, LocalizeStats* stats,
+                                          std::vector<Candidate>* verified) {
+  std::vector<PassedOver> passed;
+  std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed);
+  const size_t matched_before = stats->maps_matched;
+  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stop, stats);
+  const bool stopped = stats->maps_matched - matched_before < candidates.size();  // (or maps deleted meanwhile)
+  std::vector<Candidate> retried = stopped ? std::vector<Candidate>{} : PassedOverFailedFits(passed, hits, options);
+  if (!retried.empty()) {
+    for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, match, stop, stats)) {
+      hits.push_back(std::move(hit));
+    }
+    SortHits(&hits);
+  }
+  if (verified) {
+    *verified = std::move(candidates);
+    for (Candidate& c : retried) verified->push_back(std::move(c));
+  }
+  return hits;
+}
+
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
                                           const std::function<bool()>& stop, LocalizeStats* stats,
@@ -221,22 +246,12 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
   stats->hypotheses = hypotheses.size();
   stats->search_ms += MsSince(t);
-  std::vector<PassedOver> passed;
-  std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed);
-  const size_t matched_before = stats->maps_matched;
-  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, options.match, stop, stats);
-  const bool stopped = stats->maps_matched - matched_before < candidates.size();  // (or maps deleted meanwhile)
-  std::vector<Candidate> retried = stopped ? std::vector<Candidate>{} : PassedOverFailedFits(passed, hits, options);
-  if (!retried.empty()) {
-    for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, options.match, stop, stats)) {
-      hits.push_back(std::move(hit));
-    }
-    SortHits(&hits);
-  }
+  std::vector<Candidate> verified;
+  std::vector<LocalizedHit> hits =
+      ChooseAndVerify(query, source, hypotheses, options, options.match, stop, stats, trace ? &verified : nullptr);
   if (trace) {
     trace->hypotheses = std::move(hypotheses);
-    trace->verified = std::move(candidates);
-    for (Candidate& c : retried) trace->verified.push_back(std::move(c));
+    trace->verified = std::move(verified);
   }
   return hits;
 }

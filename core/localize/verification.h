@@ -41,8 +41,8 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
 // all fit worse than confidence.min_score in `hits` (or were not matched):
 // passing a map over assumes its neighbour shows what it shows, and a
 // neighbour that fits that badly did not.
-std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed, const std::vector<LocalizedHit>& hits,
-                                            const LocalizeOptions& options);
+std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed,
+                                            const std::vector<LocalizedHit>& hits, const LocalizeOptions& options);
 
 // Best first: score, then the closer fit, then the map id.
 void SortHits(std::vector<LocalizedHit>* hits);
@@ -54,6 +54,15 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
                                            const std::vector<Candidate>& candidates, const LocalizeOptions& options,
                                            const ScanMatchOptions& match, const std::function<bool()>& stop,
                                            LocalizeStats* stats);
+
+// ChooseCandidates, then the chosen verified with `match`, then
+// PassedOverFailedFits verified too (none once `stop` cut the first round
+// short), best hits first. `verified` (optional) receives the candidates.
+std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
+                                          const std::vector<PlaceHypothesis>& hypotheses,
+                                          const LocalizeOptions& options, const ScanMatchOptions& match,
+                                          const std::function<bool()>& stop, LocalizeStats* stats,
+                                          std::vector<Candidate>* verified = nullptr);
 
 // What SearchAndVerify chose (lmd-eval global-misses reads it).
 struct SearchTrace {

@@ -540,7 +540,8 @@ TEST(LocalizerTest, AMapPassedOverForNeighboursThatFitBadlyIsVerifiedAfterAll) {
   std::vector<localize_internal::PassedOver> passed;
   const std::vector<localize_internal::Candidate> chosen = localize_internal::ChooseCandidates(
       query, route,
-      {hypothesis(100, 0, 9), hypothesis(101, 1, 8), hypothesis(110, 2, 7), hypothesis(101, 3, 6), hypothesis(102, 4, 5)},
+      {hypothesis(100, 0, 9), hypothesis(101, 1, 8), hypothesis(110, 2, 7), hypothesis(101, 3, 6),
+       hypothesis(102, 4, 5)},
       kOptions, &passed);
   ASSERT_EQ(chosen.size(), 2u);  // 100 and 110
   ASSERT_EQ(passed.size(), 2u);  // 101 (with both its guesses), then 102, each for 100
