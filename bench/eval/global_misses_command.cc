@@ -27,9 +27,8 @@
 
 #include "bench/eval/args.h"
 #include "bench/eval/commands.h"
-#include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
-#include "core/localize/memory_collection.h"
+#include "bench/eval/stored_log.h"
 #include "core/localize/verification.h"
 #include "core/util/progress_bar.h"
 
@@ -91,13 +90,8 @@ MissClass Classify(const Dataset& d, const EvalQuery& q, const LocalQuery& query
 MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool anchored, size_t every) {
   MissCounts counts;
   counts.name = d.name;
-  std::vector<PreparedPlace> places;
-  MemoryCollection collection;
-  for (size_t i = 0; i < d.maps.size(); ++i) {
-    places.push_back(PreparePlace(d.maps[i], options));
-    (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1}, d.maps[i].trajectory);
-    if (anchored) (void)collection.SetAnchor(i, d.maps[i].truth.global_frame);
-  }
+  const std::unique_ptr<StoredLog> stored = StoreLog(d, options, anchored);
+  const MemoryCollection& collection = stored->collection;
   ProgressBar bar(d.name + ": global queries", d.queries.size());
   for (size_t k = 0; k < d.queries.size(); ++k) {
     bar.Add();
@@ -106,7 +100,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
     ++counts.asked;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
     auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
-    const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &places[q.map]);
+    const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]);
     LocalizeStats stats;
     localize_internal::SearchTrace trace;
     const std::vector<LocalizedHit> hits =
@@ -146,24 +140,12 @@ int RunGlobalMisses(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval global-misses: --every takes a number of 1 or more\n");
     return 2;
   }
-  std::string no_logs;
-  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
-  if (logs.empty()) {
-    std::fprintf(stderr, "lmd-eval global-misses: %s\n", no_logs.c_str());
-    return 2;
-  }
   const LocalizeOptions options;  // lmdd's defaults
-  DatasetOptions dataset_options;
-  dataset_options.every_map = true;  // as lmd-eval served: every map is a query
   std::vector<MissCounts> all;
-  for (const std::string& log : logs) {
-    Result<Dataset> d = LoadDataset(log, dataset_options);
-    if (!d.ok()) {
-      std::fprintf(stderr, "lmd-eval global-misses: %s\n", d.status().message().c_str());
-      return 1;
-    }
-    all.push_back(CountMisses(*d, options, args.Has("anchored"), every));
-  }
+  const int read = ForEachServedLog(args.GetAll("log"), "global-misses", [&](const Dataset& d) {
+    all.push_back(CountMisses(d, options, args.Has("anchored"), every));
+  });
+  if (read != 0) return read;
   std::printf("%-10s %6s %8s %6s %8s", "log", "asked", "matched", "missed", "place@1");
   for (const char* name : kClassNames) std::printf(" %15s", name);
   std::printf("\n");

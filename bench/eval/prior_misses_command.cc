@@ -29,9 +29,8 @@
 
 #include "bench/eval/args.h"
 #include "bench/eval/commands.h"
-#include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
-#include "core/localize/memory_collection.h"
+#include "bench/eval/stored_log.h"
 #include "core/localize/prior.h"
 #include "core/localize/verification.h"
 #include "core/sim/pose_noise.h"
@@ -50,13 +49,8 @@ struct MissCounts {
 MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const PoseNoise& noise) {
   MissCounts counts;
   counts.name = d.name;
-  std::vector<PreparedPlace> places;
-  MemoryCollection collection;
-  for (size_t i = 0; i < d.maps.size(); ++i) {
-    places.push_back(PreparePlace(d.maps[i], options));
-    (void)collection.Add(i, places.back(), MapSource::Route{1, i + 1}, d.maps[i].trajectory);
-    (void)collection.SetAnchor(i, d.maps[i].truth.global_frame);
-  }
+  const std::unique_ptr<StoredLog> stored = StoreLog(d, options, /*anchored=*/true);
+  const MemoryCollection& collection = stored->collection;
   ProgressBar bar(d.name + ": prior queries", d.queries.size());
   for (const EvalQuery& q : d.queries) {
     bar.Add();
@@ -64,7 +58,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const P
     ++counts.asked;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
     auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
-    const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &places[q.map]);
+    const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]);
     std::mt19937_64 rng(q.map + 1);
     Prior prior;
     prior.pose = PerturbedPose(d.maps[q.map].truth.global_frame, noise, rng);
@@ -117,25 +111,13 @@ int RunPriorMisses(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;
   }
-  std::string no_logs;
-  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
-  if (logs.empty()) {
-    std::fprintf(stderr, "lmd-eval prior-misses: %s\n", no_logs.c_str());
-    return 2;
-  }
   LocalizeOptions options;
   options.prior_second_pose = !args.Has("one-pose");  // the ablation: each map's first pose only
-  DatasetOptions dataset_options;
-  dataset_options.every_map = true;  // as lmd-eval served: every map is a query
   std::vector<MissCounts> all;
-  for (const std::string& log : logs) {
-    Result<Dataset> d = LoadDataset(log, dataset_options);
-    if (!d.ok()) {
-      std::fprintf(stderr, "lmd-eval prior-misses: %s\n", d.status().message().c_str());
-      return 1;
-    }
-    all.push_back(CountMisses(*d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));
-  }
+  const int read = ForEachServedLog(args.GetAll("log"), "prior-misses", [&](const Dataset& d) {
+    all.push_back(CountMisses(d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));
+  });
+  if (read != 0) return read;
   std::printf("%-12s %6s %6s %8s %13s %11s %8s %21s\n", "log", "asked", "missed", "place@1", "not verified",
               "out-scored", "shifted", "(truth scores higher)");
   MissCounts total;

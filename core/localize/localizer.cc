@@ -246,13 +246,9 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
   stats->hypotheses = hypotheses.size();
   stats->search_ms += MsSince(t);
-  std::vector<Candidate> verified;
-  std::vector<LocalizedHit> hits =
-      ChooseAndVerify(query, source, hypotheses, options, options.match, stop, stats, trace ? &verified : nullptr);
-  if (trace) {
-    trace->hypotheses = std::move(hypotheses);
-    trace->verified = std::move(verified);
-  }
+  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, hypotheses, options, options.match, stop, stats,
+                                                   trace ? &trace->verified : nullptr);
+  if (trace) trace->hypotheses = std::move(hypotheses);
   return hits;
 }
 

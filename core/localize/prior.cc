@@ -94,7 +94,8 @@ std::vector<LocalizedHit> NextBestPoses(const LocalQuery& query, const std::vect
     const auto c = std::find_if(candidates.begin(), candidates.end(),
                                 [&](const Candidate& k) { return k.map_id == best.map_id; });
     if (c == candidates.end() || !best.db) continue;
-    const ScanMatch next = MatchLocalMaps(query.match, *best.db, c->guesses, Excluding(match, query, best.pose, options));
+    const ScanMatch next =
+        MatchLocalMaps(query.match, *best.db, c->guesses, Excluding(match, query, best.pose, options));
     ++stats->maps_matched;
     if (next.score <= 0) continue;
     LocalizedHit hit = Scored(query, *best.db, next, options);
@@ -180,7 +181,9 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                         maps, &near_match);
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
   if (options.prior_second_pose && !tight) {
-    for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) hits.push_back(std::move(hit));
+    for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) {
+      hits.push_back(std::move(hit));
+    }
   }
   const std::vector<MapSource::Anchored> near =
       options.prior_first_stage && !tight

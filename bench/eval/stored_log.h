@@ -1,0 +1,31 @@
+// What lmd-eval's miss counters (prior-misses, global-misses) share: the
+// logs to read, and each log's maps stored in process as lmd-eval served
+// inserts them into lmdd.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench/eval/eval_dataset.h"
+#include "core/localize/memory_collection.h"
+
+namespace lmd::eval {
+
+struct StoredLog {
+  std::vector<PreparedPlace> places;  // by map index
+  MemoryCollection collection;        // map i under id i, robot 1, sequence i + 1, with its trajectory
+};
+
+// Every map of `d` stored; `anchored`: each at its log pose (a site map).
+std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& options, bool anchored);
+
+// The logs named (or ../shared/data's), each loaded with every map a query
+// (as lmd-eval served asks them) and handed to `count` in turn. The exit
+// code: 0, 2 when no log is named or found, 1 when one cannot be read (one
+// line on stderr, prefixed "lmd-eval `command`: ").
+int ForEachServedLog(const std::vector<std::string>& named, const std::string& command,
+                     const std::function<void(const Dataset&)>& count);
+
+}  // namespace lmd::eval
