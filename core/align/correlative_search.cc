@@ -127,7 +127,8 @@ class BranchAndBound {
 
 }  // namespace
 
-double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region) {
+double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region,
+                        double max_block_m) {
   if (query_points.empty() || db.empty() || db.levels.empty()) return 0.0;
   const double cell = db.options.cell_m;
   Point2 centroid{0, 0};
@@ -146,6 +147,7 @@ double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedM
   const int wy = static_cast<int>(std::ceil(std::max(0.0, region.half_window_y_m) / cell));
   int top = 0;
   while (top + 1 < static_cast<int>(db.levels.size()) && (1 << top) < 2 * std::max(wx, wy) + 1) ++top;
+  while (max_block_m > 0 && top > 0 && (1 << top) * cell > max_block_m + 1e-9) --top;
   int64_t best = 0;
   for (int dx = -wx; dx <= wx; dx += 1 << top) {
     for (int dy = -wy; dy <= wy; dy += 1 << top) best = std::max(best, ScoreAt(db.levels[top], r, dx, dy));

@@ -55,8 +55,11 @@ struct CorrelativeResult {
 
 // An upper bound of CorrelativeSearch's score over `region` at its centre
 // angle (mean likelihood, [0, 1]), from the coarsest pyramid level whose
-// blocks cover the window: a cheap way to rank maps before searching them.
-double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region);
+// blocks cover the window, or a finer one whose blocks are at most
+// `max_block_m` wide (then one score per block of the window): a cheap way
+// to rank maps before searching them, tighter the finer the blocks.
+double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region,
+                        double max_block_m = 0.0);
 
 // Best pose of `query_points` (query own frame) over all regions. The query
 // points should be few (subsample to ~0.2 m) since cost is linear in them.

@@ -244,6 +244,28 @@ TEST(ScanMatchTest, CorrelativeSearchFindsTheExhaustiveBest) {
   }
 }
 
+// A bound from finer blocks is still a bound (>= the search's best over the
+// window at that angle) and never looser than the coarsest level's.
+TEST(ScanMatchTest, CorrelativeBoundFromFinerBlocksStillBoundsTheSearch) {
+  const PreparedQuery query = PrepareQuery(MovedCopy(DemoMaps()[43], {0.3, -0.2, Deg(2)}));
+  CorrelativeOptions exact;
+  exact.min_score = 0.0;
+  size_t tighter = 0;
+  for (size_t db_index : {40, 43, 10, 70}) {
+    const PreparedMap db = PrepareMap(DemoMaps()[db_index]);
+    SearchRegion region;
+    region.centroid_target = {query.centroid.x + 0.4, query.centroid.y - 0.3};
+    region.half_window_x_m = region.half_window_y_m = 4.5;
+    const double best = CorrelativeSearch(query.search_points, db, {region}, exact).score;
+    const double coarse = CorrelativeBound(query.search_points, db, region);
+    const double fine = CorrelativeBound(query.search_points, db, region, 1.6);
+    EXPECT_GE(fine + 1e-9, best) << db_index;
+    EXPECT_LE(fine, coarse + 1e-9) << db_index;
+    tighter += fine < coarse - 0.01;
+  }
+  EXPECT_GE(tighter, 1u);  // the finer blocks tell something the coarsest did not
+}
+
 TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
   const PreparedMap m = PrepareMap(RichMap());
   ASSERT_GE(m.levels.size(), 2u);
