@@ -96,7 +96,8 @@ struct ServerConfig {
   // the default method that starts while at least `busy_queued_calls` calls
   // wait for a worker scan matches `busy_verify_candidates` maps (if less than
   // verify_candidates; no route neighbours retried, LocalizeOptions::
-  // passed_over_retries), and says so in its response (reduced_depth). A
+  // passed_over_retries, and the hypotheses left in vote order,
+  // fit_rank_maps), and says so in its response (reduced_depth). A
   // request that names its own verify_candidates is not reduced. 0: never.
   uint32_t busy_queued_calls = 4;
   uint32_t busy_verify_candidates = 5;

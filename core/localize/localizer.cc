@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
+#include "core/align/correlative_search.h"
 #include "core/align/icp.h"
 #include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
@@ -137,6 +139,28 @@ void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits
   }
 }
 
+void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+               std::vector<PlaceHypothesis>* hypotheses) {
+  std::unordered_set<uint64_t> maps;
+  std::vector<std::pair<double, PlaceHypothesis>> ranked;
+  size_t n = 0;
+  for (; n < hypotheses->size(); ++n) {
+    const PlaceHypothesis& h = (*hypotheses)[n];
+    if (maps.count(h.map_id) == 0 && maps.size() >= options.fit_rank_maps) break;
+    maps.insert(h.map_id);
+    const std::shared_ptr<const PreparedMap> db = source.Prepared(h.map_id);
+    const Pose2 guess = HypothesisPose(h, query.map->heading);
+    SearchRegion region;
+    region.theta = guess.theta;
+    region.centroid_target = TransformPoint(guess, query.match.centroid);
+    region.half_window_x_m = region.half_window_y_m = options.match.window_m;
+    const double fit = db ? CorrelativeBound(query.match.search_points, *db, region, options.fit_rank_block_m) : 0.0;
+    ranked.push_back({fit, h});
+  }
+  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (size_t i = 0; i < ranked.size(); ++i) (*hypotheses)[i] = std::move(ranked[i].second);
+}
+
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
                                         std::vector<PassedOver>* passed) {
@@ -245,6 +269,7 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   const auto t = Clock::now();
   std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
   stats->hypotheses = hypotheses.size();
+  if (options.fit_rank_maps > 0) RankByFit(query, source, options, &hypotheses);
   stats->search_ms += MsSince(t);
   std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, hypotheses, options, options.match, stop, stats,
                                                    trace ? &trace->verified : nullptr);

@@ -24,6 +24,12 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
 
+// The hypotheses of the first options.fit_rank_maps maps, in order of the
+// query's fit near each (LocalizeOptions::fit_rank_maps), then the others
+// as they were.
+void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+               std::vector<PlaceHypothesis>* hypotheses);
+
 // A map passed over for chosen route neighbours, with its guesses.
 struct PassedOver {
   Candidate candidate;

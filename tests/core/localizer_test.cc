@@ -572,6 +572,34 @@ TEST(LocalizerTest, AMapPassedOverForNeighboursThatFitBadlyIsVerifiedAfterAll) {
   EXPECT_TRUE(retried({hit(100, 0.2)}, one).empty());
 }
 
+// Votes say which features match, the fit whether the walls line up: a map
+// of the place with the fewest votes goes before better-voted maps of other
+// places, and only the first fit_rank_maps maps are put in order.
+TEST(LocalizerTest, HypothesesAreRankedByTheQuerysFitNearEach) {
+  MemoryCollection maps;
+  Store({30, 60, 120, 200}, &maps);
+  const LocalQuery query = PrepareLocalQuery(DemoMaps()[120], kOptions, &DemoPlace(120));
+  auto at_own_frame = [&](uint64_t id, double votes) {  // the query's frame on the map's: right only for 120
+    PlaceHypothesis h;
+    h.map_id = id;
+    h.db_heading = query.map->heading;
+    h.votes = votes;
+    return h;
+  };
+  const std::vector<PlaceHypothesis> by_votes = {at_own_frame(30, 9), at_own_frame(60, 8), at_own_frame(200, 7),
+                                                 at_own_frame(120, 2)};
+  std::vector<PlaceHypothesis> ranked = by_votes;
+  localize_internal::RankByFit(query, maps, kOptions, &ranked);
+  ASSERT_EQ(ranked.size(), by_votes.size());
+  EXPECT_EQ(ranked[0].map_id, 120u);
+  LocalizeOptions three = kOptions;
+  three.fit_rank_maps = 3;
+  ranked = by_votes;
+  localize_internal::RankByFit(query, maps, three, &ranked);
+  ASSERT_EQ(ranked.size(), by_votes.size());
+  EXPECT_EQ(ranked.back().map_id, 120u);
+}
+
 // The same queries with their place stored (every third map) and with every
 // map that shares a point with them left out. The demo world's rooms come
 // from one generator, so a look-alike may explain 60-90 % of a query; with
