@@ -5,9 +5,10 @@
 //
 //   1. first stage: the place index (place_index.h) ranks pose hypotheses
 //      (map, quarter turn, translation) by feature votes;
-//   2. verification: the best `verify_hypotheses` hypotheses are scan
-//      matched (core/align: branch and bound in a window around each, ICP),
-//      one match per map over all its hypotheses;
+//   2. verification: the hypotheses of the first fit_rank_maps maps put
+//      in order of the query's fit near each, then the maps of the best
+//      (verify_maps) scan matched (core/align: branch and bound in a window
+//      around each, ICP), one match per map over all its hypotheses;
 //   3. re-ranking by the verification score: the share of query points the
 //      map explains, minus the share that lands in its observed free space,
 //      minus the share of its points that land in the query's free space;
