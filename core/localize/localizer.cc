@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
-#include <unordered_set>
 
 #include "core/align/correlative_search.h"
 #include "core/align/icp.h"
@@ -139,22 +138,28 @@ void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits
   }
 }
 
+double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& guess, double window_m, double block_m) {
+  SearchRegion region;
+  region.theta = guess.theta;
+  region.centroid_target = TransformPoint(guess, query.match.centroid);
+  region.half_window_x_m = region.half_window_y_m = window_m;
+  return CorrelativeBound(query.match.search_points, db, region, block_m);
+}
+
 void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                std::vector<PlaceHypothesis>* hypotheses) {
-  std::unordered_set<uint64_t> maps;
+  std::unordered_map<uint64_t, std::shared_ptr<const PreparedMap>> maps;  // each read once
   std::vector<std::pair<double, PlaceHypothesis>> ranked;
-  size_t n = 0;
-  for (; n < hypotheses->size(); ++n) {
-    const PlaceHypothesis& h = (*hypotheses)[n];
-    if (maps.count(h.map_id) == 0 && maps.size() >= options.fit_rank_maps) break;
-    maps.insert(h.map_id);
-    const std::shared_ptr<const PreparedMap> db = source.Prepared(h.map_id);
-    const Pose2 guess = HypothesisPose(h, query.map->heading);
-    SearchRegion region;
-    region.theta = guess.theta;
-    region.centroid_target = TransformPoint(guess, query.match.centroid);
-    region.half_window_x_m = region.half_window_y_m = options.match.window_m;
-    const double fit = db ? CorrelativeBound(query.match.search_points, *db, region, options.fit_rank_block_m) : 0.0;
+  for (const PlaceHypothesis& h : *hypotheses) {
+    auto it = maps.find(h.map_id);
+    if (it == maps.end()) {
+      if (maps.size() >= options.fit_rank_maps) break;
+      it = maps.emplace(h.map_id, source.Prepared(h.map_id)).first;
+    }
+    const double fit =
+        it->second ? FitNear(query, *it->second, HypothesisPose(h, query.map->heading), options.match.window_m,
+                             options.fit_rank_block_m)
+                   : 0.0;
     ranked.push_back({fit, h});
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });

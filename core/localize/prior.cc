@@ -64,11 +64,7 @@ std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSourc
     double needed_deg = 0.0;
     const Pose2 guess = PriorGuess(query, *db, a.pose, prior, match->window_deg, &needed_deg);
     window_deg = std::max(window_deg, needed_deg);
-    SearchRegion region;
-    region.theta = guess.theta;
-    region.centroid_target = TransformPoint(guess, query.match.centroid);
-    region.half_window_x_m = region.half_window_y_m = match->window_m;
-    const double bound = CorrelativeBound(query.match.search_points, *db, region, kBoundBlockM);
+    const double bound = FitNear(query, *db, guess, match->window_m, kBoundBlockM);
     bounded.push_back({bound, Candidate{a.map_id, {guess}, bound, bounded.size()}});
   }
   std::stable_sort(bounded.begin(), bounded.end(), [](const auto& x, const auto& y) { return x.first > y.first; });

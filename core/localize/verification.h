@@ -24,6 +24,11 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
 
+// How well the query's points could fit `db` near `guess` (query own frame
+// in db's): CorrelativeBound at the guess' turn over +-window_m, from blocks
+// of at most block_m.
+double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& guess, double window_m, double block_m);
+
 // The hypotheses of the first options.fit_rank_maps maps, in order of the
 // query's fit near each (LocalizeOptions::fit_rank_maps), then the others
 // as they were.
