@@ -16,6 +16,9 @@ int RunExport(int argc, char** argv);
 int RunServed(int argc, char** argv);
 // lmd-eval prior-misses [--log FILE...] [--one-pose] [--tracking]
 int RunPriorMisses(int argc, char** argv);
+// lmd-eval global-misses [--log FILE...] [--every N] [--anchored]
 int RunGlobalMisses(int argc, char** argv);
+// lmd-eval truth-audit [--log FILE...] [--every N]
+int RunTruthAudit(int argc, char** argv);
 
 }  // namespace lmd::eval

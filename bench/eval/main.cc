@@ -45,6 +45,10 @@ void Usage(std::FILE* out) {
                "      truth scores no higher, or where the first stage and verification lost it; --anchored:\n"
                "      the maps stored anchored at their log poses (a site map). About 2.5 min for the nine\n"
                "      logs on 2 cores, 50 s with --every 3.\n"
+               "  truth-audit [--log FILE...] [--every N]\n"
+               "      in process, how much of a hit's pose error is the log's ground truth: maps of one place\n"
+               "      matched in loops of three (q in j, q in m, j in m), each match against the log's\n"
+               "      relative pose and each loop's closing error, where the log's poses cancel.\n"
                "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
                "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
                "  export --log FILE... --out DIR\n"
@@ -66,6 +70,7 @@ int main(int argc, char** argv) {
   if (command == "served") return lmd::eval::RunServed(argc - 2, argv + 2);
   if (command == "prior-misses") return lmd::eval::RunPriorMisses(argc - 2, argv + 2);
   if (command == "global-misses") return lmd::eval::RunGlobalMisses(argc - 2, argv + 2);
+  if (command == "truth-audit") return lmd::eval::RunTruthAudit(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);
   return 2;

@@ -1,0 +1,157 @@
+// lmd-eval truth-audit: how much of the pose error lmd-eval reports is the
+// log's ground truth, not the scan matcher. For a query map q and two maps j
+// and m that show its place (and each other's), lmdd's matcher (the scan
+// match from the true relative pose, then the refinement that gives a
+// served hit its pose) poses q in j, q in m and j in m. Each is compared
+// with the log's relative pose, as lmd-eval served scores a hit. The three
+// also close a loop in which the log's poses cancel: q in m against (j in m)
+// after (q in j). If the matches' errors are independent, the loop's error
+// is about sqrt(3) times one match's own error; what a match's error against
+// the log has beyond that is the log's relative pose error.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "bench/eval/answer_scoring.h"
+#include "bench/eval/args.h"
+#include "bench/eval/commands.h"
+#include "bench/eval/eval_dataset.h"
+#include "bench/eval/stored_log.h"
+#include "core/align/icp.h"
+#include "core/eval/retrieval_metrics.h"
+#include "core/localize/verification.h"
+#include "core/localmap/pose_ops.h"
+#include "core/util/progress_bar.h"
+
+namespace lmd::eval {
+namespace {
+
+struct AuditCounts {
+  std::string name;
+  size_t loops = 0;
+  size_t log_off = 0;  // loops that close, with a match off the log's pose as far as a sure answer may be
+  std::vector<double> truth_cm, truth_deg;  // each match against the log's relative pose
+  std::vector<double> loop_cm, loop_deg;    // each loop's closing error
+};
+
+// The matcher starts this far from the log's pose, so that it finds the
+// pose itself (from the log's pose exactly: the same medians within 0.3 cm).
+const Pose2 kStartOffset{0.25, -0.2, 2 * M_PI / 180};
+// A loop this tight says the matches agree with each other (and a match off
+// the log's pose by more than a sure answer may be, kSurePoseM, that the
+// log is off).
+constexpr double kClosedCm = 5.0, kClosedDeg = 0.25;
+
+// `a` posed in `b` by lmdd's matcher and refinement, from near the log's
+// pose. False when the match explains too little of `a` to be a fix.
+bool MatchFromTruth(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, size_t a, size_t b,
+                    Pose2* pose) {
+  const LocalQuery query = PrepareLocalQuery(d.maps[a], options, &stored.places[a]);
+  const std::shared_ptr<const PreparedMap> db = stored.collection.Prepared(b);
+  if (!db || query.match.points.empty()) return false;
+  const ScanMatch m = MatchLocalMaps(query.match, *db, {Compose(d.TruePose(a, b), kStartOffset)}, options.match);
+  const Pose2 refined = RefinePose(query.match.points, *db, m.pose, options.refine);
+  const LocalizedHit hit = localize_internal::ScoredAt(query, *db, refined, options);
+  *pose = hit.score >= m.score ? refined : m.pose;
+  return std::max(hit.score, m.score) >= options.confidence.min_score;
+}
+
+void AddError(const Pose2& estimate, const Pose2& truth, std::vector<double>* cm, std::vector<double>* deg) {
+  double err_m = 0, err_deg = 0;
+  PoseError(estimate, truth, &err_m, &err_deg);
+  cm->push_back(100 * err_m), deg->push_back(err_deg);
+}
+
+AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every) {
+  AuditCounts counts;
+  counts.name = d.name;
+  const std::unique_ptr<StoredLog> stored = StoreLog(d, options, false);
+  ProgressBar bar(d.name + ": loops of three matches", d.queries.size());
+  for (size_t k = 0; k < d.queries.size(); ++k) {
+    bar.Add();
+    const EvalQuery& q = d.queries[k];
+    if (k % every != 0) continue;
+    // The first two maps of q's place that the matcher fits to each other.
+    bool closed = false;
+    for (size_t jx = 0; jx < q.places.size() && !closed; ++jx) {
+      const size_t j = q.places[jx];
+      Pose2 qj_pose;
+      if (!MatchFromTruth(d, *stored, options, q.map, j, &qj_pose)) continue;
+      for (size_t mx = jx + 1; mx < q.places.size() && !closed; ++mx) {
+        const size_t m = q.places[mx];
+        Pose2 qm_pose, jm_pose;
+        if (!MatchFromTruth(d, *stored, options, j, m, &jm_pose) ||
+            !MatchFromTruth(d, *stored, options, q.map, m, &qm_pose)) {
+          continue;
+        }
+        closed = true;
+        ++counts.loops;
+        AddError(qj_pose, d.TruePose(q.map, j), &counts.truth_cm, &counts.truth_deg);
+        AddError(qm_pose, d.TruePose(q.map, m), &counts.truth_cm, &counts.truth_deg);
+        AddError(jm_pose, d.TruePose(j, m), &counts.truth_cm, &counts.truth_deg);
+        AddError(Compose(jm_pose, qj_pose), qm_pose, &counts.loop_cm, &counts.loop_deg);
+        bool off = false;
+        for (size_t i = counts.truth_cm.size() - 3; i < counts.truth_cm.size(); ++i) {
+          off |= counts.truth_cm[i] > 100 * kSurePoseM || counts.truth_deg[i] > kSurePoseDeg;
+        }
+        if (off && counts.loop_cm.back() <= kClosedCm && counts.loop_deg.back() <= kClosedDeg) ++counts.log_off;
+      }
+    }
+  }
+  bar.Done();
+  return counts;
+}
+
+double Median(std::vector<double> v) { return v.empty() ? 0.0 : Quantile(v, 0.5); }
+
+void Print(const AuditCounts& c) {
+  const double truth = Median(c.truth_cm), loop = Median(c.loop_cm);
+  const double matcher = loop / std::sqrt(3.0);
+  std::printf("%-10s %6zu %13.1f %12.2f %12.1f %11.2f %11.1f %12.1f %14zu\n", c.name.c_str(), c.loops, truth,
+              Median(c.truth_deg), loop, Median(c.loop_deg), matcher,
+              std::sqrt(std::max(0.0, truth * truth - matcher * matcher)), c.log_off);
+}
+
+}  // namespace
+
+int RunTruthAudit(int argc, char** argv) {
+  Args args;
+  if (!args.Parse(argc, argv, 0, {})) {
+    std::fprintf(stderr, "lmd-eval truth-audit: %s\n", args.error().c_str());
+    return 2;
+  }
+  size_t every = 0;
+  try {
+    every = std::stoul(args.Get("every", "1"));
+  } catch (const std::exception&) {
+  }
+  if (every == 0) {
+    std::fprintf(stderr, "lmd-eval truth-audit: --every takes a number of 1 or more\n");
+    return 2;
+  }
+  const LocalizeOptions options;  // lmdd's defaults
+  std::vector<AuditCounts> all;
+  const int read = ForEachServedLog(args.GetAll("log"), "truth-audit", [&](const Dataset& d) {
+    all.push_back(Audit(d, options, every));
+  });
+  if (read != 0) return read;
+  std::printf("medians; a match: lmdd's pose of one map in another against the log's; a loop: three matches closed\n");
+  std::printf("%-10s %6s %13s %12s %12s %11s %11s %12s %14s\n", "log", "loops", "match cm", "match deg", "loop cm",
+              "loop deg", "matcher cm", "log's cm", "log off, 0.2m");
+  AuditCounts total;
+  total.name = "all";
+  for (const AuditCounts& c : all) {
+    Print(c);
+    total.loops += c.loops, total.log_off += c.log_off;
+    total.truth_cm.insert(total.truth_cm.end(), c.truth_cm.begin(), c.truth_cm.end());
+    total.truth_deg.insert(total.truth_deg.end(), c.truth_deg.begin(), c.truth_deg.end());
+    total.loop_cm.insert(total.loop_cm.end(), c.loop_cm.begin(), c.loop_cm.end());
+    total.loop_deg.insert(total.loop_deg.end(), c.loop_deg.begin(), c.loop_deg.end());
+  }
+  Print(total);
+  return 0;
+}
+
+}  // namespace lmd::eval
