@@ -27,6 +27,7 @@
 #include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/lmdd_process.h"
+#include "bench/eval/sequence_context.h"
 #include "bench/eval/served_report.h"
 #include "client/lmd_client.h"
 #include "core/util/progress_bar.h"
@@ -65,11 +66,7 @@ struct ServedOptions {
   bool anchored = false;
   // Priors: the true pose with this noise (--mode tracking: kTrackingPrior).
   PoseNoise prior_noise = kRoughPrior;
-  // Sequences: this many maps in all, each `sequence_spacing` maps (1 m
-  // each) before the next; odometry to them off by 2 % of the distance and
-  // up to 1 deg per metre.
-  size_t sequence_maps = 3;
-  size_t sequence_spacing = 5;
+  SequenceShape sequence;  // sequences: how many maps, how far apart
   size_t max_queries = 0;  // per log, 0 = every map
   int threads = 1;         // concurrent queries
   bool changes = true;
@@ -152,7 +149,6 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
 template <typename Request>
 void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& options, uint64_t seed, Request* request) {
   std::mt19937_64 rng(seed ^ (0x9E3779B97F4A7C15ULL * (q.map + 1)));
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   const Pose2 truth = d.maps[q.map].truth.global_frame;
   if (options.mode == QueryMode::kPrior) {
     v1::Prior* prior = request->mutable_prior();
@@ -161,41 +157,20 @@ void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& optio
     prior->set_heading_sigma_rad(options.prior_noise.sigma_deg * M_PI / 180.0);
   }
   if (options.mode == QueryMode::kSequence) {
-    for (size_t k = 1; k < options.sequence_maps; ++k) {
-      if (q.map < k * options.sequence_spacing) break;
-      const LocalMap& earlier = d.maps[q.map - k * options.sequence_spacing];
-      if (earlier.points.empty()) break;
-      Pose2 odometry = Compose(Inverse(truth), earlier.truth.global_frame);
-      const double travel = d.maps[q.map].truth.travel_start - earlier.truth.travel_start;
-      const double direction = 2 * M_PI * u(rng);
-      odometry.x += 0.02 * travel * std::cos(direction);
-      odometry.y += 0.02 * travel * std::sin(direction);
-      odometry.theta += (2.0 * u(rng) - 1.0) * travel * M_PI / 180.0;
+    for (const EarlierMap& e : EarlierMaps(d, q, options.sequence, &rng)) {
       v1::SequenceMap* step = request->add_sequence();
-      *step->mutable_map() = ToProto(earlier);
-      *step->mutable_in_query() = ToProto(odometry);
-      step->set_travel_m(travel);
+      *step->mutable_map() = ToProto(d.maps[e.map]);
+      *step->mutable_in_query() = ToProto(e.in_newest);
+      step->set_travel_m(e.travel_m);
     }
   }
 }
 
-// The query as the protocol asks it. A sequence query carries its earlier
-// maps: the stored maps within 10 m of travel of any of them are left out
-// too (else an earlier map finds its own route neighbours, which place the
-// newest map where its own excluded neighbours lie), and so are they as
-// places.
+// The query as the protocol asks it (a sequence query: without the stored
+// maps around its earlier maps, WithoutSequenceNeighbours).
 EvalQuery FairQuery(const Dataset& d, EvalQuery q, const ServedOptions& options) {
   if (options.mode != QueryMode::kSequence) return q;
-  const size_t back = std::min(q.map / options.sequence_spacing, options.sequence_maps - 1) * options.sequence_spacing;
-  const double from = d.maps[q.map - back].truth.travel_start - kExcludedTravelM;
-  const double to = d.maps[q.map].truth.travel_start + kExcludedTravelM;
-  auto near_route = [&](size_t j) {
-    const double t = d.maps[j].truth.travel_start;
-    return t >= from && t <= to;
-  };
-  q.candidates.erase(std::remove_if(q.candidates.begin(), q.candidates.end(), near_route), q.candidates.end());
-  q.places.erase(std::remove_if(q.places.begin(), q.places.end(), near_route), q.places.end());
-  return q;
+  return WithoutSequenceNeighbours(d, std::move(q), options.sequence, kExcludedTravelM);
 }
 
 struct QueryRecord {
