@@ -18,6 +18,8 @@ int RunServed(int argc, char** argv);
 int RunPriorMisses(int argc, char** argv);
 // lmd-eval global-misses [--log FILE...] [--every N] [--anchored]
 int RunGlobalMisses(int argc, char** argv);
+// lmd-eval sequence-misses [--log FILE...] [--every N] [--list]
+int RunSequenceMisses(int argc, char** argv);
 // lmd-eval truth-audit [--log FILE...] [--every N]
 int RunTruthAudit(int argc, char** argv);
 

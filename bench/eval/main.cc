@@ -45,6 +45,10 @@ void Usage(std::FILE* out) {
                "      truth scores no higher, or where the first stage and verification lost it; --anchored:\n"
                "      the maps stored anchored at their log poses (a site map). About 2.5 min for the nine\n"
                "      logs on 2 cores, 50 s with --every 3.\n"
+               "  sequence-misses [--log FILE...] [--every N] [--list]\n"
+               "      in process, the --mode sequence queries (every Nth) whose top hit misses the place, by\n"
+               "      why: the true pose never proposed, what the robot saw before not stored, or the truth's\n"
+               "      sequence fitting no better (--list: each miss with every map's fit).\n"
                "  truth-audit [--log FILE...] [--every N]\n"
                "      in process, how much of a hit's pose error is the log's ground truth: maps of one place\n"
                "      matched in loops of three (q in j, q in m, j in m), each match against the log's\n"
@@ -70,6 +74,7 @@ int main(int argc, char** argv) {
   if (command == "served") return lmd::eval::RunServed(argc - 2, argv + 2);
   if (command == "prior-misses") return lmd::eval::RunPriorMisses(argc - 2, argv + 2);
   if (command == "global-misses") return lmd::eval::RunGlobalMisses(argc - 2, argv + 2);
+  if (command == "sequence-misses") return lmd::eval::RunSequenceMisses(argc - 2, argv + 2);
   if (command == "truth-audit") return lmd::eval::RunTruthAudit(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);

@@ -28,6 +28,43 @@ bool Near(const Pose2& a, const Pose2& b, double metres, double radians) {
 
 }  // namespace
 
+SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
+                              const MapSource& source, const LocalizeOptions& options, const Pose2& newest_pose,
+                              const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop) {
+  // Every map of the sequence localised where the pose puts it (the window
+  // grown by the odometry's drift over its travel: a heading error turns the
+  // map about its own origin, which moves its centroid, the search's pivot,
+  // too).
+  LocalizeOptions near_options = options;
+  near_options.self_rival_radius_m = 0;  // a map's fit is asked here, not whether it is sure
+  near_options.prior_first_stage = false;  // the hypotheses came from it
+  near_options.prior_second_pose = false;  // a hypothesis names the pose; its window is the drift's
+  near_options.prior_weak_fits = false;
+  SequenceCheck check;
+  for (size_t k = 0; k <= earlier.size(); ++k) {
+    if (stop && stop()) break;
+    const LocalQuery& query = k == 0 ? newest : earlier[k - 1].query;
+    Prior prior;
+    prior.pose = newest_pose;
+    prior.radius_m = options.match.window_m;
+    prior.heading_sigma_rad = options.match.window_deg * M_PI / 180;
+    if (k > 0) {
+      const SequenceStep& step = earlier[k - 1];
+      const double heading_error = options.sequence_drift_rad_per_m * step.travel_m;
+      prior.pose = Compose(newest_pose, step.in_newest);
+      prior.radius_m += options.sequence_drift * step.travel_m +
+                        std::hypot(step.query.match.centroid.x, step.query.match.centroid.y) * heading_error;
+      prior.heading_sigma_rad += heading_error;
+    }
+    near_options.prior_maps = k == 0 ? options.sequence_newest_maps : options.sequence_prior_maps;
+    const Localization l = LocalizeNear(query, source, near_options, prior, excluded, stop);
+    check.maps_matched += l.stats.maps_matched;
+    check.windows.push_back(prior);
+    check.best.push_back(l.hits.empty() ? LocalizedHit{} : l.hits[0]);
+  }
+  return check;
+}
+
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
@@ -99,44 +136,22 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
                    [](const Hypothesis& a, const Hypothesis& b) { return a.single > b.single; });
   if (hypotheses.size() > options.sequence_hypotheses) hypotheses.resize(options.sequence_hypotheses);
 
-  // Each hypothesis: every map of the sequence localised where it puts it
-  // (the window grown by the odometry's drift over its travel: a heading
-  // error turns the map about its own origin, which moves its centroid, the
-  // search's pivot, too). Its score is the sequence's mean.
-  LocalizeOptions near_options = options;
-  near_options.self_rival_radius_m = 0;  // a map's fit is asked here, not whether it is sure
-  near_options.prior_maps = options.sequence_prior_maps;
-  near_options.prior_first_stage = false;  // the hypotheses came from it
-  near_options.prior_second_pose = false;  // a hypothesis names the pose; its window is the drift's
-  near_options.prior_weak_fits = false;
   for (Hypothesis& h : hypotheses) {
     if (stop && stop()) break;
-    Prior at;
-    at.pose = h.newest;
-    at.radius_m = options.match.window_m;
-    at.heading_sigma_rad = options.match.window_deg * M_PI / 180;
-    const Localization here = LocalizeNear(newest, source, near_options, at, excluded, stop);
-    out.stats.maps_matched += here.stats.maps_matched;
-    const LocalizedHit* newest_shown = best_shown(0, at);
-    if (!here.hits.empty()) h.hit = here.hits[0];
-    if (newest_shown && (here.hits.empty() || newest_shown->score > h.hit.score)) h.hit = *newest_shown;
-    if (!h.hit.db) continue;
-    double total = h.hit.score;
-    for (size_t s = 0; s < earlier.size(); ++s) {
-      const SequenceStep& step = earlier[s];
-      const double heading_error = options.sequence_drift_rad_per_m * step.travel_m;
-      Prior prior;
-      prior.pose = Compose(h.newest, step.in_newest);
-      prior.radius_m = options.match.window_m + options.sequence_drift * step.travel_m +
-                       std::hypot(step.query.match.centroid.x, step.query.match.centroid.y) * heading_error;
-      prior.heading_sigma_rad = heading_error + options.match.window_deg * M_PI / 180;
-      const Localization l = LocalizeNear(step.query, source, near_options, prior, excluded, stop);
-      out.stats.maps_matched += l.stats.maps_matched;
-      const LocalizedHit* step_shown = best_shown(s + 1, prior);
-      const double score = std::max(l.hits.empty() ? 0.0 : l.hits[0].score, step_shown ? step_shown->score : 0.0);
+    const SequenceCheck check = CheckSequenceAt(newest, earlier, source, options, h.newest, excluded, stop);
+    out.stats.maps_matched += check.maps_matched;
+    // Each map's better fit: where the check found it, or already shown.
+    double total = 0.0;
+    for (size_t k = 0; k < check.best.size(); ++k) {
+      const LocalizedHit* shown_here = best_shown(k, check.windows[k]);
+      const LocalizedHit& found = check.best[k];
+      const LocalizedHit* better = shown_here && (!found.db || shown_here->score > found.score) ? shown_here : &found;
+      if (k == 0) h.hit = *better;
+      const double score = better->db ? better->score : 0.0;
       total += score;
-      h.agreeing += score >= options.confidence.min_score;
+      if (k > 0) h.agreeing += score >= options.confidence.min_score;
     }
+    if (!h.hit.db) continue;
     h.score = total / static_cast<double>(earlier.size() + 1);
   }
   // The hits: the newest map's best hit at each hypothesis, by the

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/localize/localizer.h"
+#include "core/localize/prior.h"
 
 namespace lmd {
 
@@ -28,6 +29,21 @@ struct SequenceStep {
 // score; sequence_agreeing counts the earlier maps that fit (score >=
 // confidence.min_score). Without anchored maps the newest map is judged
 // alone (verdict.sequence_agreeing 0).
+// Each map of the sequence localised where `newest_pose` (the newest map's
+// own frame in the collection's frame) puts it: LocalizeNear, the window
+// grown by the odometry's drift over the map's travel. A hypothesis of
+// LocalizeSequence is scored by this (and the hits it has in hand); lmd-eval
+// sequence-misses asks it at the truth.
+struct SequenceCheck {
+  std::vector<Prior> windows;       // per map (0: the newest, k: earlier[k - 1]): where it was looked for
+  std::vector<LocalizedHit> best;   // ... and its best hit there (db null: none)
+  size_t maps_matched = 0;
+};
+SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
+                              const MapSource& source, const LocalizeOptions& options, const Pose2& newest_pose,
+                              const std::function<bool(uint64_t)>& excluded = {},
+                              const std::function<bool()>& stop = {});
+
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded = {},

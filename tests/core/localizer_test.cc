@@ -276,6 +276,60 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   EXPECT_GE(compared, 10u);
 }
 
+// A sequence hypothesis is checked where it puts each map: the newest at
+// the pose, each earlier map where the odometry carries it, in a window
+// grown by the drift over its travel; the newest map through
+// sequence_newest_maps maps (its hit there is the answer's), each earlier
+// one through sequence_prior_maps. At the true pose every map fits its
+// place; 6 m away the sequence fits worse.
+TEST(LocalizerTest, ASequenceIsCheckedWhereAPosePutsEachOfItsMaps) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions one_newest = kOptions;
+  one_newest.sequence_newest_maps = 1;
+  size_t checked = 0, truth_fits_better = 0, fewer_matched = 0;
+  for (size_t q = 13; q < DemoMaps().size(); q += 12) {
+    const LocalMap newest_map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalQuery newest = PrepareLocalQuery(newest_map, kOptions);
+    const Pose2 truth = newest_map.truth.global_frame;
+    std::vector<SequenceStep> earlier;
+    for (size_t back : {size_t{4}, size_t{8}}) {
+      const LocalMap& map = DemoMaps()[q - back];
+      earlier.push_back({PrepareLocalQuery(map, kOptions), Compose(Inverse(truth), map.truth.global_frame),
+                         double(back)});
+    }
+    const SequenceCheck at_truth = CheckSequenceAt(newest, earlier, collection, kOptions, truth);
+    ASSERT_EQ(at_truth.windows.size(), 3u);
+    ASSERT_EQ(at_truth.best.size(), 3u);
+    EXPECT_LT(TranslationError(at_truth.windows[0].pose, truth), 1e-9);
+    for (size_t k = 1; k < 3; ++k) {
+      EXPECT_LT(TranslationError(at_truth.windows[k].pose, DemoMaps()[q - 4 * k].truth.global_frame), 1e-6) << q;
+      EXPECT_GT(at_truth.windows[k].radius_m, at_truth.windows[0].radius_m) << q;  // drift over its travel
+      EXPECT_GT(at_truth.windows[k].heading_sigma_rad, at_truth.windows[k - 1].heading_sigma_rad) << q;
+    }
+    double mean_at_truth = 0.0;
+    for (size_t k = 0; k < 3; ++k) {
+      const LocalizedHit& hit = at_truth.best[k];
+      ASSERT_TRUE(hit.db) << q << " map " << k;
+      ASSERT_TRUE(hit.collection_pose) << q << " map " << k;
+      EXPECT_LT(TranslationError(*hit.collection_pose, at_truth.windows[k].pose), 0.3) << q << " map " << k;
+      mean_at_truth += hit.score / 3;
+    }
+    const SequenceCheck away = CheckSequenceAt(newest, earlier, collection, kOptions, Compose(truth, {6.0, 0.0, 0.0}));
+    double mean_away = 0.0;
+    for (const LocalizedHit& hit : away.best) mean_away += (hit.db ? hit.score : 0.0) / 3;
+    truth_fits_better += mean_at_truth > mean_away;
+    const SequenceCheck fewer = CheckSequenceAt(newest, earlier, collection, one_newest, truth);
+    EXPECT_LE(fewer.maps_matched, at_truth.maps_matched) << q;
+    fewer_matched += fewer.maps_matched + kOptions.sequence_newest_maps - 1 == at_truth.maps_matched;
+    ++checked;
+  }
+  EXPECT_GE(checked, 15u);
+  // The demo world's corridors repeat: 6 m along one a sequence may fit as well.
+  EXPECT_GE(truth_fits_better, checked * 3 / 4);
+  EXPECT_GE(fewer_matched, checked * 3 / 4);
+}
+
 // A tracking robot's tight prior (radius and heading sigma both small) is
 // answered from more of the maps nearest it without the first stage; a
 // loose one, in radius or in heading, runs the stage over the maps near the
