@@ -66,6 +66,8 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
   counts.name = d.name;
   const std::unique_ptr<StoredLog> stored = StoreLog(d, options, /*anchored=*/true);
   const SequenceShape shape;
+  std::vector<const EvalQuery*> query_of_map(d.maps.size(), nullptr);
+  for (const EvalQuery& q : d.queries) query_of_map[q.map] = &q;
   ProgressBar bar(d.name + ": sequence queries", d.queries.size());
   for (size_t k = 0; k < d.queries.size(); ++k) {
     bar.Add();
@@ -77,8 +79,14 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
     auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
     std::mt19937_64 rng(kSeed ^ (0x9E3779B97F4A7C15ULL * (q.map + 1)));  // as lmd-eval served draws it
     std::vector<SequenceStep> steps;
+    std::string places_stored = " " + std::to_string(q.places.size());  // each map's, for --list
     for (const EarlierMap& e : EarlierMaps(d, q, shape, &rng)) {
       steps.push_back({PrepareLocalQuery(d.maps[e.map], options, &stored->places[e.map]), e.in_newest, e.travel_m});
+      const EvalQuery* own = query_of_map[e.map];
+      const auto stored_places = own == nullptr ? 0 : std::count_if(own->places.begin(), own->places.end(), [&](size_t j) {
+        return candidates.count(j) > 0;
+      });
+      places_stored += " " + std::to_string(stored_places);
     }
     const LocalQuery newest = PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]);
     const Localization answer = LocalizeSequence(newest, steps, stored->collection, options, excluded);
@@ -100,9 +108,11 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
       at_answer = Scores(CheckSequenceAt(newest, steps, stored->collection, options,
                                          *answer.hits[0].collection_pose, excluded));
     }
-    std::fprintf(stderr, "%s map %zu: %s; answer %.2f (%s), %zu earlier maps; at the truth:%s; at the answer:%s\n",
-                 d.name.c_str(), q.map, kClassNames[c], top, answer.verdict.sure ? "sure" : "unsure", steps.size(),
-                 Scores(at_truth).c_str(), at_answer.c_str());
+    std::fprintf(stderr,
+                 "%s map %zu: %s; answer %.2f (%s); maps of each map's place stored:%s; its fit at the truth:%s; "
+                 "at the answer:%s\n",
+                 d.name.c_str(), q.map, kClassNames[c], top, answer.verdict.sure ? "sure" : "unsure",
+                 places_stored.c_str(), Scores(at_truth).c_str(), at_answer.c_str());
   }
   bar.Done();
   return counts;
