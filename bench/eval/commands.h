@@ -20,7 +20,7 @@ int RunPriorMisses(int argc, char** argv);
 int RunGlobalMisses(int argc, char** argv);
 // lmd-eval sequence-misses [--log FILE...] [--every N] [--list]
 int RunSequenceMisses(int argc, char** argv);
-// lmd-eval truth-audit [--log FILE...] [--every N]
+// lmd-eval truth-audit [--log FILE...] [--every N] [--list]
 int RunTruthAudit(int argc, char** argv);
 
 }  // namespace lmd::eval

@@ -8,6 +8,13 @@
 // after (q in j). If the matches' errors are independent, the loop's error
 // is about sqrt(3) times one match's own error; what a match's error against
 // the log has beyond that is the log's relative pose error.
+//
+// It also asks, of each map with at least three maps of its place, whether
+// they agree on moving it: each poses the map within +-3 m of the log's
+// pose, and when at least three agree (within 0.1 m and 0.5 deg of their
+// median) on a pose off the log's by more than a sure answer may be (0.2 m
+// or 1 deg), the map's own log pose is likely wrong (or its local map
+// distorted). --list prints those maps.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +41,8 @@ struct AuditCounts {
   size_t log_off = 0;  // loops that close, with a match off the log's pose as far as a sure answer may be
   std::vector<double> truth_cm, truth_deg;  // each match against the log's relative pose
   std::vector<double> loop_cm, loop_deg;    // each loop's closing error
+  size_t judged = 0;  // maps with at least three maps of their place that fit them
+  size_t moved = 0;   // ... that those agree to move beyond a sure answer's tolerance
 };
 
 // The matcher starts this far from the log's pose, so that it finds the
@@ -43,15 +52,23 @@ const Pose2 kStartOffset{0.25, -0.2, 2 * M_PI / 180};
 // the log's pose by more than a sure answer may be, kSurePoseM, that the
 // log is off).
 constexpr double kClosedCm = 5.0, kClosedDeg = 0.25;
+// Maps of a map's place moving it: each searches this far around the log's
+// pose, and this many agreeing within kAgreeM and kAgreeDeg of their median
+// say where the map is.
+constexpr double kMoveWindowM = 3.0;
+constexpr size_t kMinAgreeing = 3;
+constexpr double kAgreeM = 0.1, kAgreeDeg = 0.5;
 
 // `a` posed in `b` by lmdd's matcher and refinement, from near the log's
 // pose. False when the match explains too little of `a` to be a fix.
 bool MatchFromTruth(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, size_t a, size_t b,
-                    Pose2* pose) {
+                    Pose2* pose, double window_m = 0.0) {
   const LocalQuery query = PrepareLocalQuery(d.maps[a], options, &stored.places[a]);
   const std::shared_ptr<const PreparedMap> db = stored.collection.Prepared(b);
   if (!db || query.match.points.empty()) return false;
-  const ScanMatch m = MatchLocalMaps(query.match, *db, {Compose(d.TruePose(a, b), kStartOffset)}, options.match);
+  ScanMatchOptions match = options.match;
+  if (window_m > 0) match.window_m = window_m;
+  const ScanMatch m = MatchLocalMaps(query.match, *db, {Compose(d.TruePose(a, b), kStartOffset)}, match);
   const Pose2 refined = RefinePose(query.match.points, *db, m.pose, options.refine);
   const LocalizedHit hit = localize_internal::ScoredAt(query, *db, refined, options);
   *pose = hit.score >= m.score ? refined : m.pose;
@@ -64,7 +81,30 @@ void AddError(const Pose2& estimate, const Pose2& truth, std::vector<double>* cm
   cm->push_back(100 * err_m), deg->push_back(err_deg);
 }
 
-AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every) {
+// How far the maps of q's place agree to move q from its log pose (q's own
+// frame), if at least three agree; false otherwise.
+bool MovedByItsPlace(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, const EvalQuery& q,
+                     Pose2* moved, size_t* agreeing) {
+  std::vector<Pose2> moves;
+  for (size_t j : q.places) {
+    Pose2 pose;
+    if (MatchFromTruth(d, stored, options, q.map, j, &pose, kMoveWindowM)) {
+      moves.push_back(Compose(Inverse(d.TruePose(q.map, j)), pose));
+    }
+  }
+  if (moves.size() < kMinAgreeing) return false;
+  std::vector<double> xs, ys, thetas;
+  for (const Pose2& m : moves) xs.push_back(m.x), ys.push_back(m.y), thetas.push_back(std::remainder(m.theta, 2 * M_PI));
+  *moved = {Quantile(xs, 0.5), Quantile(ys, 0.5), Quantile(thetas, 0.5)};
+  *agreeing = std::count_if(moves.begin(), moves.end(), [&](const Pose2& m) {
+    double err_m = 0, err_deg = 0;
+    PoseError(m, *moved, &err_m, &err_deg);
+    return err_m <= kAgreeM && err_deg <= kAgreeDeg;
+  });
+  return *agreeing >= kMinAgreeing;
+}
+
+AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every, bool list) {
   AuditCounts counts;
   counts.name = d.name;
   const std::unique_ptr<StoredLog> stored = StoreLog(d, options, false);
@@ -73,6 +113,19 @@ AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every
     bar.Add();
     const EvalQuery& q = d.queries[k];
     if (k % every != 0) continue;
+    Pose2 moved;
+    size_t agreeing = 0;
+    if (MovedByItsPlace(d, *stored, options, q, &moved, &agreeing)) {
+      ++counts.judged;
+      if (std::hypot(moved.x, moved.y) > kSurePoseM || std::abs(moved.theta) * 180 / M_PI > kSurePoseDeg) {
+        ++counts.moved;
+        if (list) {
+          std::fprintf(stderr, "%s: %s moved %.2f m %.2f deg by %zu of the %zu maps of its place\n", d.name.c_str(),
+                       d.maps[q.map].id.c_str(), std::hypot(moved.x, moved.y), moved.theta * 180 / M_PI, agreeing,
+                       q.places.size());
+        }
+      }
+    }
     // The first two maps of q's place that the matcher fits to each other.
     bool closed = false;
     for (size_t jx = 0; jx < q.places.size() && !closed; ++jx) {
@@ -109,16 +162,16 @@ double Median(std::vector<double> v) { return v.empty() ? 0.0 : Quantile(v, 0.5)
 void Print(const AuditCounts& c) {
   const double truth = Median(c.truth_cm), loop = Median(c.loop_cm);
   const double matcher = loop / std::sqrt(3.0);
-  std::printf("%-10s %6zu %13.1f %12.2f %12.1f %11.2f %11.1f %12.1f %14zu\n", c.name.c_str(), c.loops, truth,
+  std::printf("%-10s %6zu %13.1f %12.2f %12.1f %11.2f %11.1f %12.1f %14zu %8zu %8zu\n", c.name.c_str(), c.loops, truth,
               Median(c.truth_deg), loop, Median(c.loop_deg), matcher,
-              std::sqrt(std::max(0.0, truth * truth - matcher * matcher)), c.log_off);
+              std::sqrt(std::max(0.0, truth * truth - matcher * matcher)), c.log_off, c.judged, c.moved);
 }
 
 }  // namespace
 
 int RunTruthAudit(int argc, char** argv) {
   Args args;
-  if (!args.Parse(argc, argv, 0, {})) {
+  if (!args.Parse(argc, argv, 0, {"list"})) {
     std::fprintf(stderr, "lmd-eval truth-audit: %s\n", args.error().c_str());
     return 2;
   }
@@ -134,17 +187,17 @@ int RunTruthAudit(int argc, char** argv) {
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<AuditCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "truth-audit", [&](const Dataset& d) {
-    all.push_back(Audit(d, options, every));
+    all.push_back(Audit(d, options, every, args.Has("list")));
   });
   if (read != 0) return read;
   std::printf("medians; a match: lmdd's pose of one map in another against the log's; a loop: three matches closed\n");
-  std::printf("%-10s %6s %13s %12s %12s %11s %11s %12s %14s\n", "log", "loops", "match cm", "match deg", "loop cm",
-              "loop deg", "matcher cm", "log's cm", "log off, 0.2m");
+  std::printf("%-10s %6s %13s %12s %12s %11s %11s %12s %14s %8s %8s\n", "log", "loops", "match cm", "match deg",
+              "loop cm", "loop deg", "matcher cm", "log's cm", "log off, 0.2m", "judged", "moved");
   AuditCounts total;
   total.name = "all";
   for (const AuditCounts& c : all) {
     Print(c);
-    total.loops += c.loops, total.log_off += c.log_off;
+    total.loops += c.loops, total.log_off += c.log_off, total.judged += c.judged, total.moved += c.moved;
     total.truth_cm.insert(total.truth_cm.end(), c.truth_cm.begin(), c.truth_cm.end());
     total.truth_deg.insert(total.truth_deg.end(), c.truth_deg.begin(), c.truth_deg.end());
     total.loop_cm.insert(total.loop_cm.end(), c.loop_cm.begin(), c.loop_cm.end());
