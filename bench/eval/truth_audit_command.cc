@@ -1,8 +1,8 @@
 // lmd-eval truth-audit: how much of the pose error lmd-eval reports is the
 // log's ground truth, not the scan matcher. For a query map q and two maps j
-// and m that show its place (and each other's), lmdd's matcher (the scan
-// match from the true relative pose, then the refinement that gives a
-// served hit its pose) poses q in j, q in m and j in m. Each is compared
+// and m that show its place (and that fit each other), lmdd's matcher (the
+// scan match from near the log's relative pose, then the refinement that
+// gives a served hit its pose) poses q in j, q in m and j in m. Each is compared
 // with the log's relative pose, as lmd-eval served scores a hit. The three
 // also close a loop in which the log's poses cancel: q in m against (j in m)
 // after (q in j). If the matches' errors are independent, the loop's error
@@ -41,8 +41,8 @@ struct AuditCounts {
   size_t log_off = 0;  // loops that close, with a match off the log's pose as far as a sure answer may be
   std::vector<double> truth_cm, truth_deg;  // each match against the log's relative pose
   std::vector<double> loop_cm, loop_deg;    // each loop's closing error
-  size_t judged = 0;  // maps with at least three maps of their place that fit them
-  size_t moved = 0;   // ... that those agree to move beyond a sure answer's tolerance
+  size_t judged = 0;  // maps on whose pose at least three maps of their place agree
+  size_t moved = 0;   // ... and put it off the log's by more than a sure answer may be
 };
 
 // The matcher starts this far from the log's pose, so that it finds the
