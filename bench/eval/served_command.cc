@@ -177,6 +177,7 @@ struct QueryRecord {
   AnswerOutcome still, changed;
   double best_score = 0, rival_score = 0, changed_best = 0, changed_rival = 0;
   uint32_t agreeing = 0;
+  std::string top_hit;  // the top hit's map id ("" without a hit)
 };
 
 Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, const ServedOptions& options,
@@ -230,6 +231,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
       Answer a = FromResponse(answer, index_of);
       a.wall_ms = wall;
       rec.still = ScoreAnswer(d, q, a, false);
+      if (!a.hits.empty()) rec.top_hit = d.maps[a.hits[0].db].id;
       rec.best_score = answer.localization().best_score();
       rec.rival_score = answer.localization().rival_score();
       rec.agreeing = answer.localization().agreeing();
@@ -279,13 +281,13 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     if (options.changes) changed.push_back(r.changed);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f\n",
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
                   r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms,
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
-                  r.changed_best, r.changed_rival, r.changed.cpu_ms);
+                  r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str());
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);
