@@ -26,9 +26,8 @@
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/stored_log.h"
-#include "core/align/icp.h"
 #include "core/eval/retrieval_metrics.h"
-#include "core/localize/verification.h"
+#include "core/eval/truth_audit.h"
 #include "core/localmap/pose_ops.h"
 #include "core/util/progress_bar.h"
 
@@ -45,63 +44,27 @@ struct AuditCounts {
   size_t moved = 0;   // ... and put it off the log's by more than a sure answer may be
 };
 
-// The matcher starts this far from the log's pose, so that it finds the
-// pose itself (from the log's pose exactly: the same medians within 0.3 cm).
-const Pose2 kStartOffset{0.25, -0.2, 2 * M_PI / 180};
 // A loop this tight says the matches agree with each other (and a match off
 // the log's pose by more than a sure answer may be, kSurePoseM, that the
 // log is off).
 constexpr double kClosedCm = 5.0, kClosedDeg = 0.25;
-// Maps of a map's place moving it: each searches this far around the log's
-// pose, and this many agreeing within kAgreeM and kAgreeDeg of their median
-// say where the map is.
-constexpr double kMoveWindowM = 3.0;
-constexpr size_t kMinAgreeing = 3;
-constexpr double kAgreeM = 0.1, kAgreeDeg = 0.5;
 
 // `a` posed in `b` by lmdd's matcher and refinement, from near the log's
-// pose. False when the match explains too little of `a` to be a fix.
+// pose (core/eval/truth_audit.h). False when the match is no fix.
 bool MatchFromTruth(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, size_t a, size_t b,
-                    Pose2* pose, double window_m = 0.0) {
-  const LocalQuery query = PrepareLocalQuery(d.maps[a], options, &stored.places[a]);
+                    Pose2* pose) {
   const std::shared_ptr<const PreparedMap> db = stored.collection.Prepared(b);
-  if (!db || query.match.points.empty()) return false;
-  ScanMatchOptions match = options.match;
-  if (window_m > 0) match.window_m = window_m;
-  const ScanMatch m = MatchLocalMaps(query.match, *db, {Compose(d.TruePose(a, b), kStartOffset)}, match);
-  const Pose2 refined = RefinePose(query.match.points, *db, m.pose, options.refine);
-  const LocalizedHit hit = localize_internal::ScoredAt(query, *db, refined, options);
-  *pose = hit.score >= m.score ? refined : m.pose;
-  return std::max(hit.score, m.score) >= options.confidence.min_score;
+  if (!db) return false;
+  const std::optional<Pose2> m =
+      MatchNearLogPose(PrepareLocalQuery(d.maps[a], options, &stored.places[a]), *db, d.TruePose(a, b), options);
+  if (m) *pose = *m;
+  return m.has_value();
 }
 
 void AddError(const Pose2& estimate, const Pose2& truth, std::vector<double>* cm, std::vector<double>* deg) {
   double err_m = 0, err_deg = 0;
   PoseError(estimate, truth, &err_m, &err_deg);
   cm->push_back(100 * err_m), deg->push_back(err_deg);
-}
-
-// How far the maps of q's place agree to move q from its log pose (q's own
-// frame), if at least three agree; false otherwise.
-bool MovedByItsPlace(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, const EvalQuery& q,
-                     Pose2* moved, size_t* agreeing) {
-  std::vector<Pose2> moves;
-  for (size_t j : q.places) {
-    Pose2 pose;
-    if (MatchFromTruth(d, stored, options, q.map, j, &pose, kMoveWindowM)) {
-      moves.push_back(Compose(Inverse(d.TruePose(q.map, j)), pose));
-    }
-  }
-  if (moves.size() < kMinAgreeing) return false;
-  std::vector<double> xs, ys, thetas;
-  for (const Pose2& m : moves) xs.push_back(m.x), ys.push_back(m.y), thetas.push_back(std::remainder(m.theta, 2 * M_PI));
-  *moved = {Quantile(xs, 0.5), Quantile(ys, 0.5), Quantile(thetas, 0.5)};
-  *agreeing = std::count_if(moves.begin(), moves.end(), [&](const Pose2& m) {
-    double err_m = 0, err_deg = 0;
-    PoseError(m, *moved, &err_m, &err_deg);
-    return err_m <= kAgreeM && err_deg <= kAgreeDeg;
-  });
-  return *agreeing >= kMinAgreeing;
 }
 
 AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every, bool list) {
@@ -113,15 +76,22 @@ AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every
     bar.Add();
     const EvalQuery& q = d.queries[k];
     if (k % every != 0) continue;
-    Pose2 moved;
-    size_t agreeing = 0;
-    if (MovedByItsPlace(d, *stored, options, q, &moved, &agreeing)) {
+    std::vector<PlaceMap> place;
+    std::vector<std::shared_ptr<const PreparedMap>> held;  // keeps `place`'s maps alive
+    for (size_t j : q.places) {
+      held.push_back(stored->collection.Prepared(j));
+      if (held.back()) place.push_back({held.back().get(), d.TruePose(q.map, j)});
+    }
+    const std::optional<PlaceMove> moved =
+        MoveByItsPlace(PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]), place, options);
+    if (moved) {
       ++counts.judged;
-      if (std::hypot(moved.x, moved.y) > kSurePoseM || std::abs(moved.theta) * 180 / M_PI > kSurePoseDeg) {
+      const Pose2& m = moved->move;
+      if (std::hypot(m.x, m.y) > kSurePoseM || std::abs(m.theta) * 180 / M_PI > kSurePoseDeg) {
         ++counts.moved;
         if (list) {
           std::fprintf(stderr, "%s: %s moved %.2f m %.2f deg by %zu of the %zu maps of its place\n", d.name.c_str(),
-                       d.maps[q.map].id.c_str(), std::hypot(moved.x, moved.y), moved.theta * 180 / M_PI, agreeing,
+                       d.maps[q.map].id.c_str(), std::hypot(m.x, m.y), m.theta * 180 / M_PI, moved->agreeing,
                        q.places.size());
         }
       }
