@@ -50,10 +50,34 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
       v.rival_score = std::max(v.rival_score, h.score);
     }
   }
+  // Anchored maps of the place that fit the query put it somewhere: where
+  // they agree, but not on the best hit's pose within what a sure answer
+  // promises, the pose is not known that well.
+  if (best.collection_pose && options.max_pose_spread_m > 0) {
+    std::vector<double> xs, ys, thetas;
+    for (size_t i = 1; i < hits->size(); ++i) {
+      const JudgedHit& h = (*hits)[i];
+      if (!h.agrees_with_best || !h.collection_pose || h.score < options.min_score) continue;
+      const Pose2 d = Compose(Inverse(*best.collection_pose), *h.collection_pose);
+      xs.push_back(d.x), ys.push_back(d.y), thetas.push_back(std::remainder(d.theta, 2 * M_PI));
+    }
+    if (xs.size() >= 2) {
+      auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+      };
+      v.pose_spread_m = std::hypot(median(xs), median(ys));
+      v.pose_spread_deg = std::abs(median(thetas)) * 180 / M_PI;
+    }
+  }
   const double margin = v.best_score - v.rival_score;
   v.confidence = 1.0 / (1.0 + std::exp(-(options.bias + options.score_weight * v.best_score +
                                          options.margin_weight * margin)));
   v.sure = v.best_score >= options.min_score && margin >= options.min_margin && v.confidence >= options.min_confidence;
+  if (options.max_pose_spread_m > 0 &&
+      (v.pose_spread_m > options.max_pose_spread_m || v.pose_spread_deg > options.max_pose_spread_deg)) {
+    v.sure = false;
+  }
   return v;
 }
 

@@ -232,6 +232,41 @@ TEST(JudgeTest, AnAgreeingHitCountsAndIsNoRival) {
   EXPECT_FALSE(shifted[1].agrees_with_best);
 }
 
+// Anchored hits that agree with the best (within same_place_m) but put the
+// query, by their median, farther from the best hit's pose than a sure
+// answer promises: the pose is not known that well, so it is not sure.
+// One such hit, or hits that do not fit (below min_score), say nothing.
+TEST(JudgeTest, AgreeingAnchoredMapsThatPutTheQueryElsewhereMakeItNotSure) {
+  const Maps& m = TheMaps();
+  const Pose2 site{10.0, 5.0, 0.3};  // the best hit's pose of the query in the site frame
+  auto hits_at = [&](const std::vector<std::pair<Pose2, double>>& others) {
+    std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, site}};
+    for (const auto& [off, score] : others) hits.push_back({score, kQueryPose, &m.room, false, Compose(site, off)});
+    return hits;
+  };
+  const Pose2 near{0.05, -0.03, 0.2 * M_PI / 180}, far{0.4, 0.1, 0.0}, turned{0.0, 0.0, 2.0 * M_PI / 180};
+  std::vector<JudgedHit> close = hits_at({{near, 0.85}, {near, 0.8}});
+  const Verdict a = Judge(&close);
+  EXPECT_TRUE(a.sure);
+  EXPECT_EQ(a.agreeing, 2u);
+  EXPECT_NEAR(a.pose_spread_m, std::hypot(near.x, near.y), 1e-9);
+  for (const Pose2& off : {far, turned}) {
+    std::vector<JudgedHit> spread = hits_at({{off, 0.85}, {off, 0.8}, {near, 0.8}});
+    const Verdict b = Judge(&spread);
+    EXPECT_EQ(b.agreeing, 3u);  // one place (same_place_m), no rival
+    EXPECT_DOUBLE_EQ(b.rival_score, 0.0);
+    EXPECT_FALSE(b.sure) << off.x << " " << off.theta;
+  }
+  std::vector<JudgedHit> one = hits_at({{far, 0.85}});
+  EXPECT_TRUE(Judge(&one).sure);
+  std::vector<JudgedHit> weak = hits_at({{far, 0.5}, {far, 0.5}});
+  EXPECT_TRUE(Judge(&weak).sure);
+  ConfidenceOptions off;
+  off.max_pose_spread_m = 0;
+  std::vector<JudgedHit> unchecked = hits_at({{far, 0.85}, {far, 0.8}});
+  EXPECT_TRUE(Judge(&unchecked, off).sure);
+}
+
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict close = Judge(&hits, ThresholdsOnly(), 0.75);
