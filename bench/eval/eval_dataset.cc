@@ -119,7 +119,7 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
     const LocalMap& qm = d.maps[p.query];
     const std::vector<Point2>& qg = global[p.query];
     for (size_t j = 0; j < n; ++j) {
-      if (std::abs(d.maps[j].truth.travel_start - qm.truth.travel_start) <= 10.0) continue;
+      if (std::abs(d.maps[j].truth.travel_start - qm.truth.travel_start) <= kExcludedTravelM) continue;
       if (d.maps[j].points.empty()) continue;
       q.candidates.push_back(j);
       if (!boxes[p.query].Meets(boxes[j], options.place_radius_m)) continue;

@@ -22,6 +22,8 @@ void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 
 // No relevant map (EvalQuery::relevant): the query's place was not revisited.
 inline constexpr size_t kNoRelevant = static_cast<size_t>(-1);
+// m of travel around a query whose maps are not its candidates (the paper's 10 m).
+inline constexpr double kExcludedTravelM = 10.0;
 
 struct EvalQuery {
   size_t map = 0;                 // index of the query map

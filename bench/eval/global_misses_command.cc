@@ -18,7 +18,6 @@
 //                    none verified;
 //   no hypothesis    no map of the place among them.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -38,15 +37,8 @@ namespace {
 using localize_internal::Candidate;
 
 enum MissClass { kTruthLoses, kVerifiedNear, kUnverifiedNear, kGuessesFar, kUnverified, kNoHypothesis, kClasses };
-constexpr const char* kClassNames[kClasses] = {"truth loses", "verified near", "unverified near",
+const std::vector<const char*> kClassNames = {"truth loses", "verified near", "unverified near",
                                                "guesses far", "unverified",  "no hypothesis"};
-
-struct MissCounts {
-  std::string name;
-  size_t asked = 0, missed = 0;
-  size_t matched = 0;  // maps scan matched, over all queries asked
-  std::array<size_t, kClasses> by_class{};
-};
 
 // A guess within 1 m and 10 deg of the truth: the +-1 m search around it
 // covers the true pose, up to the compass's error.
@@ -90,6 +82,7 @@ MissClass Classify(const Dataset& d, const EvalQuery& q, const LocalQuery& query
 MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool anchored, size_t every) {
   MissCounts counts;
   counts.name = d.name;
+  counts.by_class.assign(kClasses, 0);
   const std::unique_ptr<StoredLog> stored = StoreLog(d, options, anchored);
   const MemoryCollection& collection = stored->collection;
   ProgressBar bar(d.name + ": global queries", d.queries.size());
@@ -115,14 +108,6 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
   return counts;
 }
 
-void Print(const MissCounts& c) {
-  const double asked = static_cast<double>(std::max<size_t>(1, c.asked));
-  std::printf("%-10s %6zu %8.1f %6zu %8.3f", c.name.c_str(), c.asked, static_cast<double>(c.matched) / asked, c.missed,
-              1.0 - static_cast<double>(c.missed) / asked);
-  for (size_t n : c.by_class) std::printf(" %15zu", n);
-  std::printf("\n");
-}
-
 }  // namespace
 
 int RunGlobalMisses(int argc, char** argv) {
@@ -132,31 +117,14 @@ int RunGlobalMisses(int argc, char** argv) {
     return 2;
   }
   size_t every = 0;
-  try {
-    every = std::stoul(args.Get("every", "1"));
-  } catch (const std::exception&) {
-  }
-  if (every == 0) {
-    std::fprintf(stderr, "lmd-eval global-misses: --every takes a number of 1 or more\n");
-    return 2;
-  }
+  if (!ParseEvery(args, "global-misses", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<MissCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "global-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, args.Has("anchored"), every));
   });
   if (read != 0) return read;
-  std::printf("%-10s %6s %8s %6s %8s", "log", "asked", "matched", "missed", "place@1");
-  for (const char* name : kClassNames) std::printf(" %15s", name);
-  std::printf("\n");
-  MissCounts total;
-  total.name = "all";
-  for (const MissCounts& c : all) {
-    Print(c);
-    total.asked += c.asked, total.missed += c.missed, total.matched += c.matched;
-    for (size_t i = 0; i < kClasses; ++i) total.by_class[i] += c.by_class[i];
-  }
-  Print(total);
+  PrintMissTable(all, kClassNames);
   return 0;
 }
 

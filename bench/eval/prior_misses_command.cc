@@ -41,13 +41,13 @@ namespace {
 
 constexpr double kNearTruthM = 0.5;
 
-struct MissCounts {
+struct PriorMissCounts {
   std::string name;
   size_t asked = 0, missed = 0, not_verified = 0, out_scored = 0, shifted = 0, shifted_truth_better = 0;
 };
 
-MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const PoseNoise& noise) {
-  MissCounts counts;
+PriorMissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const PoseNoise& noise) {
+  PriorMissCounts counts;
   counts.name = d.name;
   const std::unique_ptr<StoredLog> stored = StoreLog(d, options, /*anchored=*/true);
   const MemoryCollection& collection = stored->collection;
@@ -97,7 +97,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, const P
   return counts;
 }
 
-void Print(const MissCounts& c) {
+void Print(const PriorMissCounts& c) {
   std::printf("%-12s %6zu %6zu %8.3f %13zu %11zu %8zu %21zu\n", c.name.c_str(), c.asked, c.missed,
               1.0 - static_cast<double>(c.missed) / std::max<size_t>(1, c.asked), c.not_verified, c.out_scored,
               c.shifted, c.shifted_truth_better);
@@ -113,16 +113,16 @@ int RunPriorMisses(int argc, char** argv) {
   }
   LocalizeOptions options;
   options.prior_second_pose = !args.Has("one-pose");  // the ablation: each map's first pose only
-  std::vector<MissCounts> all;
+  std::vector<PriorMissCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "prior-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));
   });
   if (read != 0) return read;
   std::printf("%-12s %6s %6s %8s %13s %11s %8s %21s\n", "log", "asked", "missed", "place@1", "not verified",
               "out-scored", "shifted", "(truth scores higher)");
-  MissCounts total;
+  PriorMissCounts total;
   total.name = "all";
-  for (const MissCounts& c : all) {
+  for (const PriorMissCounts& c : all) {
     Print(c);
     total.asked += c.asked, total.missed += c.missed, total.not_verified += c.not_verified;
     total.out_scored += c.out_scored, total.shifted += c.shifted, total.shifted_truth_better += c.shifted_truth_better;

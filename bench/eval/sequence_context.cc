@@ -28,10 +28,10 @@ std::vector<EarlierMap> EarlierMaps(const Dataset& d, const EvalQuery& q, const 
   return out;
 }
 
-EvalQuery WithoutSequenceNeighbours(const Dataset& d, EvalQuery q, const SequenceShape& shape, double excluded_m) {
+EvalQuery WithoutSequenceNeighbours(const Dataset& d, EvalQuery q, const SequenceShape& shape) {
   const size_t back = std::min(q.map / shape.spacing, shape.maps - 1) * shape.spacing;
-  const double from = d.maps[q.map - back].truth.travel_start - excluded_m;
-  const double to = d.maps[q.map].truth.travel_start + excluded_m;
+  const double from = d.maps[q.map - back].truth.travel_start - kExcludedTravelM;
+  const double to = d.maps[q.map].truth.travel_start + kExcludedTravelM;
   auto near_route = [&](size_t j) {
     const double t = d.maps[j].truth.travel_start;
     return t >= from && t <= to;

@@ -31,10 +31,10 @@ struct EarlierMap {
 std::vector<EarlierMap> EarlierMaps(const Dataset& d, const EvalQuery& q, const SequenceShape& shape,
                                     std::mt19937_64* rng);
 
-// `q` with the stored maps within 10 m of travel of any map of its sequence
-// left out, as candidates and as places: else an earlier map finds its own
-// route neighbours, which place the newest map where its own excluded
-// neighbours lie.
-EvalQuery WithoutSequenceNeighbours(const Dataset& d, EvalQuery q, const SequenceShape& shape, double excluded_m);
+// `q` with the stored maps within kExcludedTravelM of travel of any map of
+// its sequence left out, as candidates and as places: else an earlier map
+// finds its own route neighbours, which place the newest map where its own
+// excluded neighbours lie.
+EvalQuery WithoutSequenceNeighbours(const Dataset& d, EvalQuery q, const SequenceShape& shape);
 
 }  // namespace lmd::eval

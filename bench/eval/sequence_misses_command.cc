@@ -18,7 +18,6 @@
 // --list prints each miss with every map's score at the truth and at the
 // answer's pose.
 #include <algorithm>
-#include <array>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -36,18 +35,10 @@
 namespace lmd::eval {
 namespace {
 
-constexpr double kExcludedTravelM = 10.0;  // as lmd-eval served
 constexpr uint64_t kSeed = 1;              // lmd-eval served's default --seed
 
 enum MissClass { kNotProposed, kContextUnseen, kTruthLoses, kClasses };
-constexpr const char* kClassNames[kClasses] = {"not proposed", "context unseen", "truth loses"};
-
-struct MissCounts {
-  std::string name;
-  size_t asked = 0, missed = 0;
-  size_t matched = 0;  // maps scan matched, over all queries asked
-  std::array<size_t, kClasses> by_class{};
-};
+const std::vector<const char*> kClassNames = {"not proposed", "context unseen", "truth loses"};
 
 double Mean(const SequenceCheck& check) {
   double total = 0.0;
@@ -64,6 +55,7 @@ std::string Scores(const SequenceCheck& check) {
 MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t every, bool list) {
   MissCounts counts;
   counts.name = d.name;
+  counts.by_class.assign(kClasses, 0);
   const std::unique_ptr<StoredLog> stored = StoreLog(d, options, /*anchored=*/true);
   const SequenceShape shape;
   std::vector<const EvalQuery*> query_of_map(d.maps.size(), nullptr);
@@ -72,7 +64,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
   for (size_t k = 0; k < d.queries.size(); ++k) {
     bar.Add();
     if (k % every != 0) continue;
-    const EvalQuery q = WithoutSequenceNeighbours(d, d.queries[k], shape, kExcludedTravelM);
+    const EvalQuery q = WithoutSequenceNeighbours(d, d.queries[k], shape);
     if (q.places.empty() || d.maps[q.map].points.empty()) continue;
     ++counts.asked;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
@@ -118,14 +110,6 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
   return counts;
 }
 
-void Print(const MissCounts& c) {
-  const double asked = static_cast<double>(std::max<size_t>(1, c.asked));
-  std::printf("%-10s %6zu %8.1f %6zu %8.3f", c.name.c_str(), c.asked, static_cast<double>(c.matched) / asked, c.missed,
-              1.0 - static_cast<double>(c.missed) / asked);
-  for (size_t n : c.by_class) std::printf(" %15zu", n);
-  std::printf("\n");
-}
-
 }  // namespace
 
 int RunSequenceMisses(int argc, char** argv) {
@@ -135,31 +119,14 @@ int RunSequenceMisses(int argc, char** argv) {
     return 2;
   }
   size_t every = 0;
-  try {
-    every = std::stoul(args.Get("every", "1"));
-  } catch (const std::exception&) {
-  }
-  if (every == 0) {
-    std::fprintf(stderr, "lmd-eval sequence-misses: --every takes a number of 1 or more\n");
-    return 2;
-  }
+  if (!ParseEvery(args, "sequence-misses", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<MissCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "sequence-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, every, args.Has("list")));
   });
   if (read != 0) return read;
-  std::printf("%-10s %6s %8s %6s %8s", "log", "asked", "matched", "missed", "place@1");
-  for (const char* name : kClassNames) std::printf(" %15s", name);
-  std::printf("\n");
-  MissCounts total;
-  total.name = "all";
-  for (const MissCounts& c : all) {
-    Print(c);
-    total.asked += c.asked, total.missed += c.missed, total.matched += c.matched;
-    for (size_t i = 0; i < kClasses; ++i) total.by_class[i] += c.by_class[i];
-  }
-  Print(total);
+  PrintMissTable(all, kClassNames);
   return 0;
 }
 

@@ -55,9 +55,6 @@ enum class QueryMode {
   kSequence,  // with the robot's earlier maps and perturbed odometry to them
 };
 
-// m of travel around a query (and each map of its sequence) whose maps are left out.
-constexpr double kExcludedTravelM = 10.0;
-
 struct ServedOptions {
   std::string collection_prefix = "served-";
   QueryMode mode = QueryMode::kGlobal;
@@ -170,7 +167,7 @@ void AddContext(const Dataset& d, const EvalQuery& q, const ServedOptions& optio
 // maps around its earlier maps, WithoutSequenceNeighbours).
 EvalQuery FairQuery(const Dataset& d, EvalQuery q, const ServedOptions& options) {
   if (options.mode != QueryMode::kSequence) return q;
-  return WithoutSequenceNeighbours(d, std::move(q), options.sequence, kExcludedTravelM);
+  return WithoutSequenceNeighbours(d, std::move(q), options.sequence);
 }
 
 struct QueryRecord {

@@ -1,5 +1,6 @@
 #include "bench/eval/stored_log.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "bench/eval/data_paths.h"
@@ -35,6 +36,43 @@ int ForEachServedLog(const std::vector<std::string>& named, const std::string& c
     count(*d);
   }
   return 0;
+}
+
+bool ParseEvery(const Args& args, const std::string& command, size_t* every) {
+  *every = 0;
+  try {
+    *every = std::stoul(args.Get("every", "1"));
+  } catch (const std::exception&) {
+  }
+  if (*every == 0) std::fprintf(stderr, "lmd-eval %s: --every takes a number of 1 or more\n", command.c_str());
+  return *every > 0;
+}
+
+namespace {
+
+void PrintMissRow(const MissCounts& c) {
+  const double asked = static_cast<double>(std::max<size_t>(1, c.asked));
+  std::printf("%-10s %6zu %8.1f %6zu %8.3f", c.name.c_str(), c.asked, static_cast<double>(c.matched) / asked, c.missed,
+              1.0 - static_cast<double>(c.missed) / asked);
+  for (size_t n : c.by_class) std::printf(" %15zu", n);
+  std::printf("\n");
+}
+
+}  // namespace
+
+void PrintMissTable(const std::vector<MissCounts>& logs, const std::vector<const char*>& class_names) {
+  std::printf("%-10s %6s %8s %6s %8s", "log", "asked", "matched", "missed", "place@1");
+  for (const char* name : class_names) std::printf(" %15s", name);
+  std::printf("\n");
+  MissCounts total;
+  total.name = "all";
+  total.by_class.assign(class_names.size(), 0);
+  for (const MissCounts& c : logs) {
+    PrintMissRow(c);
+    total.asked += c.asked, total.missed += c.missed, total.matched += c.matched;
+    for (size_t i = 0; i < c.by_class.size() && i < total.by_class.size(); ++i) total.by_class[i] += c.by_class[i];
+  }
+  PrintMissRow(total);
 }
 
 }  // namespace lmd::eval

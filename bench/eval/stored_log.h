@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/eval/args.h"
 #include "bench/eval/eval_dataset.h"
 #include "core/localize/memory_collection.h"
 
@@ -27,5 +28,21 @@ std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& opt
 // line on stderr, prefixed "lmd-eval `command`: ").
 int ForEachServedLog(const std::vector<std::string>& named, const std::string& command,
                      const std::function<void(const Dataset&)>& count);
+
+// --every N (default 1): every Nth query. False, with one line on stderr
+// prefixed "lmd-eval `command`: ", when it is not a number of 1 or more.
+bool ParseEvery(const Args& args, const std::string& command, size_t* every);
+
+// One log's misses (or "all"), by class.
+struct MissCounts {
+  std::string name;
+  size_t asked = 0, missed = 0;
+  size_t matched = 0;             // maps scan matched, over all queries asked
+  std::vector<size_t> by_class;   // as many as the command's class names
+};
+
+// The table of `logs` and their total: asked, maps matched per query,
+// missed, place@1, then each class.
+void PrintMissTable(const std::vector<MissCounts>& logs, const std::vector<const char*>& class_names);
 
 }  // namespace lmd::eval

@@ -49,14 +49,14 @@ struct AuditCounts {
 // log is off).
 constexpr double kClosedCm = 5.0, kClosedDeg = 0.25;
 
-// `a` posed in `b` by lmdd's matcher and refinement, from near the log's
-// pose (core/eval/truth_audit.h). False when the match is no fix.
-bool MatchFromTruth(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, size_t a, size_t b,
-                    Pose2* pose) {
+// Map `a` (prepared as `query`) posed in `b` by lmdd's matcher and
+// refinement, from near the log's pose (core/eval/truth_audit.h). False when
+// the match is no fix.
+bool MatchFromTruth(const Dataset& d, const StoredLog& stored, const LocalizeOptions& options, const LocalQuery& query,
+                    size_t a, size_t b, Pose2* pose) {
   const std::shared_ptr<const PreparedMap> db = stored.collection.Prepared(b);
   if (!db) return false;
-  const std::optional<Pose2> m =
-      MatchNearLogPose(PrepareLocalQuery(d.maps[a], options, &stored.places[a]), *db, d.TruePose(a, b), options);
+  const std::optional<Pose2> m = MatchNearLogPose(query, *db, d.TruePose(a, b), options);
   if (m) *pose = *m;
   return m.has_value();
 }
@@ -76,14 +76,14 @@ AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every
     bar.Add();
     const EvalQuery& q = d.queries[k];
     if (k % every != 0) continue;
+    const LocalQuery query = PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]);
     std::vector<PlaceMap> place;
     std::vector<std::shared_ptr<const PreparedMap>> held;  // keeps `place`'s maps alive
     for (size_t j : q.places) {
       held.push_back(stored->collection.Prepared(j));
       if (held.back()) place.push_back({held.back().get(), d.TruePose(q.map, j)});
     }
-    const std::optional<PlaceMove> moved =
-        MoveByItsPlace(PrepareLocalQuery(d.maps[q.map], options, &stored->places[q.map]), place, options);
+    const std::optional<PlaceMove> moved = MoveByItsPlace(query, place, options);
     if (moved) {
       ++counts.judged;
       const Pose2& m = moved->move;
@@ -101,12 +101,13 @@ AuditCounts Audit(const Dataset& d, const LocalizeOptions& options, size_t every
     for (size_t jx = 0; jx < q.places.size() && !closed; ++jx) {
       const size_t j = q.places[jx];
       Pose2 qj_pose;
-      if (!MatchFromTruth(d, *stored, options, q.map, j, &qj_pose)) continue;
+      if (!MatchFromTruth(d, *stored, options, query, q.map, j, &qj_pose)) continue;
+      const LocalQuery j_query = PrepareLocalQuery(d.maps[j], options, &stored->places[j]);
       for (size_t mx = jx + 1; mx < q.places.size() && !closed; ++mx) {
         const size_t m = q.places[mx];
         Pose2 qm_pose, jm_pose;
-        if (!MatchFromTruth(d, *stored, options, j, m, &jm_pose) ||
-            !MatchFromTruth(d, *stored, options, q.map, m, &qm_pose)) {
+        if (!MatchFromTruth(d, *stored, options, j_query, j, m, &jm_pose) ||
+            !MatchFromTruth(d, *stored, options, query, q.map, m, &qm_pose)) {
           continue;
         }
         closed = true;
@@ -146,14 +147,7 @@ int RunTruthAudit(int argc, char** argv) {
     return 2;
   }
   size_t every = 0;
-  try {
-    every = std::stoul(args.Get("every", "1"));
-  } catch (const std::exception&) {
-  }
-  if (every == 0) {
-    std::fprintf(stderr, "lmd-eval truth-audit: --every takes a number of 1 or more\n");
-    return 2;
-  }
+  if (!ParseEvery(args, "truth-audit", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<AuditCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "truth-audit", [&](const Dataset& d) {

@@ -19,16 +19,6 @@ struct SequenceStep {
   double travel_m = 0.0;  // distance the robot travelled from it to the newest (drift grows with it)
 };
 
-// In an anchored collection: every map of the sequence is localised (first
-// stage and verification) and proposes poses for the newest through the
-// odometry; for the `sequence_hypotheses` best, each map of the sequence is
-// localised where the pose puts it (LocalizeNear; the window grown by the
-// drift over its travel) and the hypothesis scores the sequence's mean. A
-// look-alike that fools the newest map rarely fools the maps before it. The
-// hits are the newest map's at each hypothesis, ranked and judged by that
-// score; sequence_agreeing counts the earlier maps that fit (score >=
-// confidence.min_score). Without anchored maps the newest map is judged
-// alone (verdict.sequence_agreeing 0).
 // Each map of the sequence localised where `newest_pose` (the newest map's
 // own frame in the collection's frame) puts it: LocalizeNear, the window
 // grown by the odometry's drift over the map's travel. A hypothesis of
@@ -44,6 +34,16 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
                               const std::function<bool(uint64_t)>& excluded = {},
                               const std::function<bool()>& stop = {});
 
+// In an anchored collection: every map of the sequence is localised (first
+// stage and verification) and proposes poses for the newest through the
+// odometry; for the `sequence_hypotheses` best, each map of the sequence is
+// localised where the pose puts it (CheckSequenceAt) and the hypothesis
+// scores the sequence's mean. A look-alike that fools the newest map rarely
+// fools the maps before it. The
+// hits are the newest map's at each hypothesis, ranked and judged by that
+// score; sequence_agreeing counts the earlier maps that fit (score >=
+// confidence.min_score). Without anchored maps the newest map is judged
+// alone (verdict.sequence_agreeing 0).
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded = {},
