@@ -191,8 +191,27 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       hits.push_back(std::move(hit));
     }
   }
+  auto keep_each_once = [&](std::vector<LocalizedHit>* kept) {
+    // Each map once, at its better fit; none that the match moved outside the prior.
+    SortHits(kept);
+    std::unordered_set<uint64_t> seen;
+    kept->erase(std::remove_if(kept->begin(), kept->end(),
+                               [&](const LocalizedHit& h) { return !inside(h.map_id, h.pose) || !seen.insert(h.map_id).second; }),
+                kept->end());
+    SetCollectionPoses(source, kept);
+  };
+  LocalizeOptions judged = options;
+  judged.confidence.min_confidence = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
+  bool nearest_sure = false;
+  if (options.prior_stage_when_unsure && options.prior_first_stage && !tight) {
+    std::vector<LocalizedHit> kept = hits;
+    keep_each_once(&kept);
+    std::vector<JudgedHit> as_judged;
+    for (const LocalizedHit& h : kept) as_judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
+    nearest_sure = Judge(&as_judged, judged.confidence).sure;
+  }
   const std::vector<MapSource::Anchored> near =
-      options.prior_first_stage && !tight
+      options.prior_first_stage && !tight && !nearest_sure
           ? source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell, excluded)
           : std::vector<MapSource::Anchored>{};
   if (!near.empty()) {
@@ -225,13 +244,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       hits.push_back(std::move(hit));
     }
   }
-  // Each map once, at its better fit; none that the match moved outside the prior.
-  SortHits(&hits);
-  std::unordered_set<uint64_t> seen;
-  hits.erase(std::remove_if(hits.begin(), hits.end(),
-                            [&](const LocalizedHit& h) { return !inside(h.map_id, h.pose) || !seen.insert(h.map_id).second; }),
-             hits.end());
-  SetCollectionPoses(source, &hits);
+  keep_each_once(&hits);
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window (at its heading:
   // another turn would be outside the prior's).
@@ -248,8 +261,6 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       return back ? 0.0 : Scored(query, *best.db, second, options).score;
     };
   }
-  LocalizeOptions judged = options;
-  judged.confidence.min_confidence = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
   Conclude(query, judged, std::move(hits), second_pose, with_changes, &out);
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;

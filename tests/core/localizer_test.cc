@@ -339,6 +339,8 @@ TEST(LocalizerTest, ASequenceIsCheckedWhereAPosePutsEachOfItsMaps) {
 TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
   MemoryCollection collection;
   StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions always_stage = kOptions;
+  always_stage.prior_stage_when_unsure = false;
   size_t right_tight = 0, right_loose = 0, queries = 0, more_matched = 0;
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
     const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
@@ -348,8 +350,8 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
     const Prior loose_heading = PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 20.0);
     const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
     const Localization a = LocalizeNear(query, collection, kOptions, tight);
-    const Localization b = LocalizeNear(query, collection, kOptions, loose);
-    const Localization c = LocalizeNear(query, collection, kOptions, loose_heading);
+    const Localization b = LocalizeNear(query, collection, always_stage, loose);
+    const Localization c = LocalizeNear(query, collection, always_stage, loose_heading);
     ++queries;
     EXPECT_EQ(a.stats.search.lookups, 0u) << q;
     EXPECT_GT(b.stats.search.lookups, 0u) << q;
@@ -375,7 +377,9 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
 TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   MemoryCollection collection;
   StoreAnchored(EveryThirdMap(), &collection);
-  LocalizeOptions one_pose = kOptions;
+  LocalizeOptions two_poses = kOptions;
+  two_poses.prior_stage_when_unsure = false;  // the stage's maps in both runs
+  LocalizeOptions one_pose = two_poses;
   one_pose.prior_second_pose = false;
   size_t queries = 0, higher = 0;
   for (size_t q = 1; q < DemoMaps().size(); q += 2) {
@@ -384,7 +388,7 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
     const Pose2 truth = map.truth.global_frame;
     const Prior loose = PriorOff(truth, {-1.0, 2.0, -15.0}, 3.5, 20.0);
     const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
-    const Localization two = LocalizeNear(query, collection, kOptions, loose, excluded);
+    const Localization two = LocalizeNear(query, collection, two_poses, loose, excluded);
     const Localization one = LocalizeNear(query, collection, one_pose, loose, excluded);
     ++queries;
     EXPECT_GT(two.stats.maps_matched, one.stats.maps_matched) << q;
@@ -394,6 +398,47 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
     higher += best_two > best_one + 0.01;
   }
   EXPECT_GT(higher, 0u) << "of " << queries;  // 4 of 147 when written
+}
+
+// A loose prior runs the first stage only where the maps nearest it leave
+// the answer unsure: where they make it sure, the stage is skipped and the
+// answer is as right as with it; a query whose only nearby map fits weakly
+// (not sure) runs it.
+TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheAnswerUnsure) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  size_t queries = 0, skipped = 0, skipped_right = 0;
+  for (size_t q = 7; q < DemoMaps().size(); q += 29) {
+    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const Pose2 truth = map.truth.global_frame;
+    const Localization l = LocalizeNear(PrepareLocalQuery(map, kOptions), collection, kOptions,
+                                        PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0));
+    ++queries;
+    if (l.stats.search.lookups != 0) continue;
+    ++skipped;
+    EXPECT_TRUE(l.verdict.sure) << q;
+    skipped_right += l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
+                     AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
+  }
+  EXPECT_GE(skipped, queries / 2) << "of " << queries;
+  EXPECT_EQ(skipped_right, skipped);
+
+  std::vector<Segment> walls;  // a hall whose one stored map saw its west end only
+  AddBox(&walls, 0, 0, 40, 6);
+  AddBox(&walls, 1.0, 0.6, 1.8, 1.6);
+  const World hall(std::move(walls), {});
+  std::vector<Pose2> west_end, middle;
+  for (double x = 3.0; x <= 4.0; x += 0.25) west_end.push_back({x, 3.0, M_PI});
+  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
+  const LocalMap stored = ScannedMap(hall, west_end, 180.0, 11);
+  const LocalMap map = ScannedMap(hall, middle, 360.0, 12);
+  MemoryCollection one_map;
+  ASSERT_TRUE(one_map.Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
+  ASSERT_TRUE(one_map.SetAnchor(1, stored.truth.global_frame));
+  const Localization weak = LocalizeNear(PrepareLocalQuery(map, kOptions), one_map, kOptions,
+                                         PriorOff(map.truth.global_frame, {1.5, -1.0, 12.0}, 3.5, 20.0));
+  EXPECT_FALSE(weak.verdict.sure);
+  EXPECT_GT(weak.stats.search.lookups, 0u);
 }
 
 // The maps nearest a prior are searched for their best pose however weak: a
