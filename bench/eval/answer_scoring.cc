@@ -61,6 +61,10 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
   if (o.first_place_hit == 0) {
     o.pose_known = true;
     PoseError(answer.hits[0].pose, d.TruePose(q.map, answer.hits[0].db), &o.pose_err_m, &o.pose_err_deg);
+    if (answer.site_pose) {
+      o.site_known = true;
+      PoseError(*answer.site_pose, d.maps[q.map].truth.global_frame, &o.site_err_m, &o.site_err_deg);
+    }
   }
   o.top_right = o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
   o.localized = answer.localized;
@@ -89,7 +93,7 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   AnswerSummary s;
   s.queries = outcomes.size();
   size_t at1 = 0, at5 = 0, change_ok = 0;
-  std::vector<double> err_m, err_deg, cpu, wall;
+  std::vector<double> err_m, err_deg, site_m, site_deg, cpu, wall;
   for (const AnswerOutcome& o : outcomes) {
     if (o.place_counted) {
       ++s.place_queries;
@@ -97,6 +101,7 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
       at5 += o.first_place_hit >= 0 && o.first_place_hit < 5;
     }
     if (o.pose_known) err_m.push_back(o.pose_err_m), err_deg.push_back(o.pose_err_deg);
+    if (o.site_known) site_m.push_back(o.site_err_m), site_deg.push_back(o.site_err_deg);
     s.localized += o.localized;
     s.localized_wrong += o.localized && !o.localized_right;
     s.wrong_pose_fits_better += o.wrong_pose_fits_better;
@@ -117,6 +122,9 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   s.pose_count = err_m.size();
   s.pose_err_m_median = Quantile(err_m, 0.5), s.pose_err_m_p90 = Quantile(err_m, 0.9);
   s.pose_err_deg_median = Quantile(err_deg, 0.5), s.pose_err_deg_p90 = Quantile(err_deg, 0.9);
+  s.site_count = site_m.size();
+  s.site_err_m_median = Quantile(site_m, 0.5), s.site_err_m_p90 = Quantile(site_m, 0.9);
+  s.site_err_deg_median = Quantile(site_deg, 0.5);
   s.localized_share = rate(s.localized, s.queries);
   s.localized_precision = s.localized ? 1.0 - rate(s.localized_wrong, s.localized) : 1.0;
   s.change_success_at_1 = rate(change_ok, s.change_tasks);
@@ -144,6 +152,9 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
     m.place_at_1 += s.place_at_1 / n, m.place_at_5 += s.place_at_5 / n;
     m.pose_err_m_median += s.pose_err_m_median / n, m.pose_err_m_p90 += s.pose_err_m_p90 / n;
     m.pose_err_deg_median += s.pose_err_deg_median / n, m.pose_err_deg_p90 += s.pose_err_deg_p90 / n;
+    m.site_count += s.site_count;
+    m.site_err_m_median += s.site_err_m_median / n, m.site_err_m_p90 += s.site_err_m_p90 / n;
+    m.site_err_deg_median += s.site_err_deg_median / n;
     m.localized_share += s.localized_share / n, m.localized_precision += s.localized_precision / n;
     m.change_success_at_1 += s.change_success_at_1 / n, m.false_mask_share += s.false_mask_share / n;
     m.cpu_ms_p50 += s.cpu_ms_p50 / n, m.cpu_ms_p99 += s.cpu_ms_p99 / n, m.cpu_ms_mean += s.cpu_ms_mean / n;
@@ -153,11 +164,13 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
 }
 
 std::string SummaryJson(const AnswerSummary& s) {
-  char buf[1600];
+  char buf[2000];
   std::snprintf(buf, sizeof buf,
                 "{\"queries\": %zu, \"place_queries\": %zu, \"place_at_1\": %.4f, \"place_at_5\": %.4f, "
                 "\"pose_count\": %zu, \"pose_err_m_median\": %.4f, \"pose_err_m_p90\": %.4f, "
-                "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"localized\": %zu, "
+                "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"site_count\": %zu, "
+                "\"site_err_m_median\": %.4f, \"site_err_m_p90\": %.4f, \"site_err_deg_median\": %.4f, "
+                "\"localized\": %zu, "
                 "\"localized_share\": %.4f, \"localized_wrong\": %zu, \"localized_precision\": %.4f, "
                 "\"wrong_pose_fits_better\": %zu, \"unsure_right\": %zu, \"unsure_right_rival\": "
                 "{\"none\": %zu, \"self\": %zu, \"same_place\": %zu, \"place_off\": %zu, \"elsewhere\": %zu}, "
@@ -165,7 +178,8 @@ std::string SummaryJson(const AnswerSummary& s) {
                 "\"false_mask_share\": %.4f, \"cpu_ms_p50\": %.3f, \"cpu_ms_p99\": %.3f, \"cpu_ms_mean\": %.3f, "
                 "\"wall_ms_p50\": %.3f, \"wall_ms_p99\": %.3f}",
                 s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
-                s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.localized, s.localized_share,
+                s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.site_count, s.site_err_m_median,
+                s.site_err_m_p90, s.site_err_deg_median, s.localized, s.localized_share,
                 s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
                 s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
                 s.unsure_right_rival[4], s.change_tasks, s.change_success_at_1, s.masks, s.false_masks,

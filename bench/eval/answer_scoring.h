@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,7 @@ struct Answer {
   bool localized = false;   // the verdict
   double confidence = 0.0;
   double rival_score = 0.0;  // the verdict's best rival (0: none)
+  std::optional<Pose2> site_pose;  // the query's own frame in the collection's (anchored collections)
   std::vector<Mask> masks;  // best first
   double cpu_ms = 0.0;      // lmdd's (or the pipeline's) CPU on this query
   double wall_ms = 0.0;
@@ -63,6 +65,10 @@ struct AnswerOutcome {
   int first_place_hit = -1;    // position of the first hit showing it; -1 = none
   bool pose_known = false;     // the top hit shows the place
   double pose_err_m = 0.0, pose_err_deg = 0.0;
+  // The answer's site pose against the query's log pose, where the top hit
+  // shows the place and the answer has one (maps stored at their log poses).
+  bool site_known = false;
+  double site_err_m = 0.0, site_err_deg = 0.0;
   bool top_right = false;        // the top hit shows the place, its pose within kSurePose*
   bool localized = false;
   bool localized_right = false;  // localized and top_right
@@ -90,6 +96,8 @@ struct AnswerSummary {
   double place_at_1 = 0.0, place_at_5 = 0.0;
   size_t pose_count = 0;
   double pose_err_m_median = 0.0, pose_err_m_p90 = 0.0, pose_err_deg_median = 0.0, pose_err_deg_p90 = 0.0;
+  size_t site_count = 0;  // AnswerOutcome::site_known
+  double site_err_m_median = 0.0, site_err_m_p90 = 0.0, site_err_deg_median = 0.0;
   double localized_share = 0.0;      // of all queries
   double localized_precision = 1.0;  // right among localized answers (1 when none)
   size_t localized = 0, localized_wrong = 0;

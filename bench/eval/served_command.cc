@@ -114,6 +114,7 @@ Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std:
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
+  if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -138,6 +139,7 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
+  if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -278,13 +280,14 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     if (options.changes) changed.push_back(r.changed);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s\n",
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
                   r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms,
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
-                  r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str());
+                  r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str(),
+                  r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0);
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);
@@ -395,6 +398,7 @@ int RunServed(int argc, char** argv) {
     std::fprintf(stderr, "%s: %zu queries (%zu with a place): place@1 %.3f @5 %.3f, pose %.3f m, sure %.2f right %.4f, "
                  "cpu p50 %.1f p99 %.1f ms", log->name.c_str(), s.queries, s.place_queries, s.place_at_1, s.place_at_5,
                  s.pose_err_m_median, s.localized_share, s.localized_precision, s.cpu_ms_p50, s.cpu_ms_p99);
+    if (s.site_count > 0) std::fprintf(stderr, ", site pose %.3f m", s.site_err_m_median);
     if (options.changes) {
       std::fprintf(stderr, "; changes: top mask %.3f, false %.3f", log->changed.change_success_at_1,
                    log->changed.false_mask_share);

@@ -13,7 +13,7 @@ namespace {
 constexpr char kCsvHeader[] =
     "log,query,place_counted,first_place_hit,pose_err_m,pose_err_deg,localized,localized_right,"
     "wrong_pose_fits_better,confidence,best_score,rival_score,rival,agreeing,cpu_ms,wall_ms,changed_localized,"
-    "first_change_mask,masks,false_masks,changed_best_score,changed_rival_score,changed_cpu_ms,top_hit\n";
+    "first_change_mask,masks,false_masks,changed_best_score,changed_rival_score,changed_cpu_ms,top_hit,site_err_m,site_err_deg\n";
 
 struct Group {
   std::string label;
@@ -84,6 +84,21 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
   md += "\n";
   for (const ServedLog& log : run.logs) md += Row(log.name, std::to_string(log.maps), log.still, log.changed, with_changes);
   for (const Group& g : Means(run)) md += Row("**" + g.label + "**", "", g.still, g.changed, with_changes);
+  bool sited = false;
+  for (const ServedLog& log : run.logs) sited |= log.still.site_count > 0;
+  if (sited) {
+    md += "\nSite pose (maps stored at their log poses): the answer's pose in the collection's frame against the "
+          "query's log pose, where the top hit shows the place.\n\n| log | answers | site pose error (median / p90) "
+          "| deg (median) |\n|---|---|---|---|\n";
+    auto site = [](const std::string& label, const AnswerSummary& s) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "| %s | %zu | %.1f / %.1f cm | %.2f |\n", label.c_str(), s.site_count,
+                    100 * s.site_err_m_median, 100 * s.site_err_m_p90, s.site_err_deg_median);
+      return std::string(buf);
+    };
+    for (const ServedLog& log : run.logs) md += site(log.name, log.still);
+    for (const Group& g : Means(run)) md += site("**" + g.label + "**", g.still);
+  }
   md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
         "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, "
         "or a rival past the hits returned), same place (a hit whose pose is its true one, to 0.2 m and 1 deg, "
