@@ -96,7 +96,9 @@ struct Verdict {
   // The query's own frame in the collection's frame: the best hit's
   // collection_pose or, where its map is not anchored (stored by a robot
   // that did not know where it was), that of the best returned hit that
-  // agrees with it and is anchored (Localization::hits[collection_pose_hit]).
+  // agrees with it and is anchored (Localization::hits[collection_pose_hit]);
+  // where at least three agreeing anchored maps fit, their fused measure of
+  // it (LocalizeOptions::fuse_site_pose).
   std::optional<Pose2> collection_pose;
   size_t collection_pose_hit = 0;
 };

@@ -121,15 +121,49 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
                                     options.changes);
     out->stats.changes_ms += MsSince(t);
   }
+  const std::optional<Pose2> site = options.fuse_site_pose ? FusedSitePose(hits, options.confidence) : std::nullopt;
   if (hits.size() > options.top_k) hits.resize(options.top_k);
   for (size_t i = 0; i < hits.size(); ++i) {
     if (hits[i].collection_pose && hits[i].agrees_with_best) {  // the best agrees with itself
-      out->verdict.collection_pose = hits[i].collection_pose;
+      out->verdict.collection_pose = site ? site : hits[i].collection_pose;
       out->verdict.collection_pose_hit = i;
       break;
     }
   }
   out->hits = std::move(hits);
+}
+
+std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const ConfidenceOptions& options) {
+  if (hits.empty() || !hits[0].collection_pose) return std::nullopt;
+  const Pose2& best = *hits[0].collection_pose;
+  std::vector<Pose2> offsets;  // from the best's pose, headings wrapped around it
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const LocalizedHit& h = hits[i];
+    if (!h.collection_pose || !h.agrees_with_best || (i > 0 && h.score < options.min_score)) continue;
+    offsets.push_back({h.collection_pose->x - best.x, h.collection_pose->y - best.y,
+                       std::remainder(h.collection_pose->theta - best.theta, 2 * M_PI)});
+  }
+  if (offsets.size() < 3) return std::nullopt;
+  auto median = [&](double Pose2::*field) {
+    std::vector<double> v;
+    for (const Pose2& o : offsets) v.push_back(o.*field);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const Pose2 mid{median(&Pose2::x), median(&Pose2::y), median(&Pose2::theta)};
+  Pose2 sum{0, 0, 0};
+  size_t kept = 0;
+  for (const Pose2& o : offsets) {
+    if (std::hypot(o.x - mid.x, o.y - mid.y) > options.max_pose_spread_m ||
+        std::abs(o.theta - mid.theta) > options.max_pose_spread_deg * M_PI / 180) {
+      continue;
+    }
+    sum.x += o.x, sum.y += o.y, sum.theta += o.theta;
+    ++kept;
+  }
+  if (kept < 3) return std::nullopt;
+  const double n = static_cast<double>(kept);
+  return Pose2{best.x + sum.x / n, best.y + sum.y / n, std::remainder(best.theta + sum.theta / n, 2 * M_PI)};
 }
 
 void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits) {

@@ -91,6 +91,11 @@ struct LocalizeOptions {
   // The best hit's pose refined by ICP on every query point (verification
   // runs ICP on points icp_cell_m apart).
   bool refine_best = true;
+  // The answer's site pose (Verdict::collection_pose) fused from the
+  // agreeing anchored maps that fit (FusedSitePose, verification.h) rather
+  // than the best map's alone: each map's anchor and match carry their own
+  // error, and the maps of a place are independent measurements of it.
+  bool fuse_site_pose = true;
   IcpOptions refine = [] {
     IcpOptions icp;
     icp.max_iterations = 30;

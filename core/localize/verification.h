@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "core/localize/localizer.h"
@@ -23,6 +24,13 @@ struct Candidate {
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options);
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
+
+// The query's site pose as the maps that show its place measure it: each
+// agreeing anchored hit that fits (options.min_score; the best hit always)
+// is one measurement, through its own match and its own anchor. The mean of
+// those within max_pose_spread_m / _deg of their median, when at least
+// three are; else none (the best hit's pose stands).
+std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const ConfidenceOptions& options);
 
 // How well the query's points could fit `db` near `guess` (query own frame
 // in db's): CorrelativeBound at the guess' turn over +-window_m, from blocks

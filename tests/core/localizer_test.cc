@@ -477,6 +477,32 @@ TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
   EXPECT_GT(TranslationError(*kept.verdict.collection_pose, truth), 0.5);
 }
 
+// The site pose is the mean of the agreeing anchored maps that fit, within
+// 0.2 m and 1 deg of their median: an outlier, a map that fits too weakly
+// and one that disagrees are left out; fewer than three leave the best's.
+TEST(LocalizerTest, TheSitePoseIsTheMeanOfTheAgreeingAnchoredMapsThatFit) {
+  auto hit = [](double x, double y, double theta_deg, double score, bool agrees) {
+    LocalizedHit h;
+    h.collection_pose = Pose2{10.0 + x, -4.0 + y, 0.5 + theta_deg * M_PI / 180};
+    h.score = score;
+    h.agrees_with_best = agrees;
+    return h;
+  };
+  std::vector<LocalizedHit> hits = {hit(0, 0, 0, 0.9, true),         hit(0.04, 0.02, 0.4, 0.8, true),
+                                    hit(0.02, -0.02, 0.2, 0.7, true), hit(0.6, 0.0, 0.0, 0.8, true),
+                                    hit(0.1, 0.1, 0.0, 0.3, true),    hit(-3.0, 1.0, 90.0, 0.85, false)};
+  const ConfidenceOptions options;
+  const std::optional<Pose2> site = localize_internal::FusedSitePose(hits, options);
+  ASSERT_TRUE(site);
+  EXPECT_NEAR(site->x, 10.02, 1e-9);
+  EXPECT_NEAR(site->y, -4.0, 1e-9);
+  EXPECT_NEAR(site->theta, 0.5 + 0.2 * M_PI / 180, 1e-9);
+  hits.erase(hits.begin() + 2);  // two that fit and agree within the spread are too few
+  EXPECT_FALSE(localize_internal::FusedSitePose(hits, options));
+  hits[0].collection_pose.reset();  // the best not anchored: nothing to fuse around
+  EXPECT_FALSE(localize_internal::FusedSitePose(hits, options));
+}
+
 // Score = overlap - conflict - reverse conflict (weights 1); hits best first,
 // at most top_k, each with the prepared map it was matched against.
 TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {
