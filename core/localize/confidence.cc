@@ -39,10 +39,6 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
       const Pose2& b = *h.collection_pose;
       h.agrees_with_best = std::hypot(a.x - b.x, a.y - b.y) <= options.same_place_m &&
                            std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= options.same_place_deg * M_PI / 180;
-      if (!h.agrees_with_best && options.cross_check_rivals && h.fit_at_best >= options.min_score &&
-          h.best_fit_here >= 0 && h.best_fit_here <= best.score - options.min_margin) {
-        continue;  // neither agreeing nor a rival
-      }
     } else {
       // The query's pose in A and in B give B's frame in A's: A <- query <- B.
       const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));

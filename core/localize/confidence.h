@@ -77,17 +77,6 @@ struct ConfidenceOptions {
   // 33), sure 0.637 -> 0.632; tracking: 50 -> 36 (22 -> 18, 28 -> 18), sure
   // 0.666 -> 0.658; place@1 and sequence answers unchanged.
   double max_pose_spread_m = 0.2, max_pose_spread_deg = 1.0;
-  // Anchored hits: a hit that puts the query elsewhere on the site is no
-  // rival when it fits the best hit's pose too (min_score) and the best map
-  // clearly does not fit its pose (min_margin below its own fit): the map
-  // alone cannot tell the two poses apart, the best one can
-  // (JudgedHit::fit_at_best, best_fit_here). Likewise the best map's own
-  // other pose, when the other maps of the place reject it (Conclude).
-  // No threshold of its own. Served, back to back (prior; tracking): sure
-  // answers 3,155 -> 3,221 (held out +63) with 50 wrong before and after;
-  // 3,330 -> 3,376 with 36 -> 37 wrong (0.24 m off). Nearly all on mit,
-  // whose corridors fit one map at two poses.
-  bool cross_check_rivals = true;
 };
 
 struct Verdict {
@@ -124,9 +113,6 @@ struct JudgedHit {
   // anchored: two anchored hits agree when these agree (within
   // same_place_m and same_place_deg), whatever their maps look like.
   std::optional<Pose2> collection_pose;
-  // Anchored hits whose pose is not the best's: this map's score at the
-  // best hit's site pose, and the best map's at this hit's (-1: not measured).
-  double fit_at_best = -1.0, best_fit_here = -1.0;
 };
 
 // Judges `hits` (best first); sets each hit's agrees_with_best (the best

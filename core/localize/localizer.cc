@@ -81,61 +81,8 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
   return hits;
 }
 
-namespace {
-
-// Each anchored hit within the agreement window that puts the query
-// elsewhere on the site: its fit at the best hit's pose and the best map's
-// at its (JudgedHit::fit_at_best, best_fit_here).
-void CrossCheckRivals(const LocalQuery& query, const std::vector<LocalizedHit>& hits, const LocalizeOptions& options,
-                      std::vector<JudgedHit>* judged) {
-  const LocalizedHit& best = hits[0];
-  const ConfidenceOptions& c = options.confidence;
-  for (size_t i = 1; i < hits.size(); ++i) {
-    const LocalizedHit& h = hits[i];
-    if (!h.db || !h.collection_pose || h.score < best.score - c.agreement_window) continue;
-    const Pose2& a = *best.collection_pose;
-    const Pose2& b = *h.collection_pose;
-    if (std::hypot(a.x - b.x, a.y - b.y) <= c.same_place_m &&
-        std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= c.same_place_deg * M_PI / 180) {
-      continue;  // agrees: nothing to check
-    }
-    // A map's anchor is collection_pose * pose^-1; the query at site pose S
-    // lies at pose * collection_pose^-1 * S in it.
-    const Pose2 h_at_best = Compose(Compose(h.pose, Inverse(b)), a);
-    const Pose2 best_at_h = Compose(Compose(best.pose, Inverse(a)), b);
-    (*judged)[i].fit_at_best = ScoredAt(query, *h.db, h_at_best, options).score;
-    (*judged)[i].best_fit_here = ScoredAt(query, *best.db, best_at_h, options).score;
-  }
-}
-
-// Whether the site rejects the best map's other pose `in_best` (its own
-// frame): of the other agreeing anchored hits that fit, at least two, and
-// more than accept it, fit it clearly worse (min_margin) than their own
-// pose. A map that fits two poses of a corridor is no rival to itself where
-// the maps around it see which one the query is at.
-bool SiteRejectsPose(const LocalQuery& query, const std::vector<LocalizedHit>& hits,
-                     const std::vector<JudgedHit>& judged, const Pose2& in_best, const LocalizeOptions& options) {
-  const ConfidenceOptions& c = options.confidence;
-  if (!c.cross_check_rivals || hits.empty() || !hits[0].collection_pose) return false;
-  const Pose2 site = Compose(Compose(*hits[0].collection_pose, Inverse(hits[0].pose)), in_best);
-  size_t reject = 0, accept = 0;
-  for (size_t i = 1; i < hits.size(); ++i) {
-    const LocalizedHit& h = hits[i];
-    if (!judged[i].agrees_with_best || !h.db || !h.collection_pose || h.score < c.min_score) continue;
-    const double fit = ScoredAt(query, *h.db, Compose(Compose(h.pose, Inverse(*h.collection_pose)), site), options).score;
-    if (fit <= h.score - c.min_margin) {
-      ++reject;
-    } else {
-      ++accept;
-    }
-  }
-  return reject >= 2 && reject > accept;
-}
-
-}  // namespace
-
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
-              const std::function<LocalizedHit(const LocalizedHit& best)>& second_pose, bool with_changes,
+              const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
               Localization* out) {
   auto t = Clock::now();
   if (!hits.empty() && options.refine_best) {
@@ -153,16 +100,11 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   }
   std::vector<JudgedHit> judged;
   for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
-  if (options.confidence.cross_check_rivals && !hits.empty() && hits[0].collection_pose) {
-    CrossCheckRivals(query, hits, options, &judged);
-  }
   out->verdict = Judge(&judged, options.confidence);
   // Only a sure verdict can be overturned by another pose of the best map.
   if (out->verdict.sure && second_pose) {
-    const LocalizedHit second = second_pose(hits[0]);
-    if (second.score > 0 && !SiteRejectsPose(query, hits, judged, second.pose, options)) {
-      out->verdict = Judge(&judged, options.confidence, second.score);
-    }
+    const double second = second_pose(hits[0]);
+    if (second > 0) out->verdict = Judge(&judged, options.confidence, second);
   }
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
@@ -401,12 +343,12 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   Localization out;
   std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, stop, &out.stats);
   SetCollectionPoses(source, &hits);
-  std::function<LocalizedHit(const LocalizedHit&)> second_pose;  // anywhere in the best map
+  std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
       const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
                                                options.self_rival_angle_deg, options.match);
-      return second.score > 0 ? Scored(query, *best.db, second, options) : LocalizedHit{};
+      return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
     };
   }
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);

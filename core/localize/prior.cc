@@ -248,7 +248,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window (at its heading:
   // another turn would be outside the prior's).
-  std::function<LocalizedHit(const LocalizedHit&)> second_pose;
+  std::function<double(const LocalizedHit&)> second_pose;
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
       ScanMatchOptions window = options.match;
@@ -258,7 +258,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       const Point2 p = TransformPoint(second.pose, query.match.centroid);
       const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
                                    p.y - excluding.correlative.exclude_centroid.y) <= options.self_rival_radius_m;
-      return back ? LocalizedHit{} : Scored(query, *best.db, second, options);
+      return back ? 0.0 : Scored(query, *best.db, second, options).score;
     };
   }
   Conclude(query, judged, std::move(hits), second_pose, with_changes, &out);

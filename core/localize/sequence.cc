@@ -170,18 +170,17 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   LocalizeOptions judged = options;
   judged.refine_best = false;  // a refinement would score the newest map alone
   judged.fuse_site_pose = false;  // its hits are hypotheses, each the newest map's best at one
-  judged.confidence.cross_check_rivals = false;  // their scores are the sequences', not one map's fit
   judged.confidence.min_score = std::max(options.confidence.min_score, options.confidence.sequence_min_score);
   judged.confidence.min_confidence = 0.0;  // fitted to single maps' scores, not a sequence's mean
   // The newest map's best fit elsewhere in the best hit's map is a rival: in
   // a corridor every map of the sequence may fit as well shifted along it
   // (the odometry moves them together), and only that shift tells.
-  std::function<LocalizedHit(const LocalizedHit&)> second_pose;
+  std::function<double(const LocalizedHit&)> second_pose;
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
       const ScanMatch second = SecondBestMatch(newest.match, *best.db, best.pose, options.self_rival_radius_m,
                                                options.self_rival_angle_deg, options.match);
-      return second.score > 0 ? Scored(newest, *best.db, second, options) : LocalizedHit{};
+      return second.score > 0 ? Scored(newest, *best.db, second, options).score : 0.0;
     };
   }
   Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out);

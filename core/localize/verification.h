@@ -98,11 +98,10 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
                                           SearchTrace* trace = nullptr);
 
 // The best hit refined, the verdict (with `second_pose`, when set and the
-// verdict would be sure: the best map at another pose, a rival unless the
-// site rejects it, SiteRejectsPose), the change masks when asked and sure,
-// and the hits cut to top_k.
+// verdict would be sure: the best map's score at another pose, a rival),
+// the change masks when asked and sure, and the hits cut to top_k.
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
-              const std::function<LocalizedHit(const LocalizedHit& best)>& second_pose, bool with_changes,
+              const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
               Localization* out);
 
 // Sets each hit's collection_pose from its map's anchor, where it has one.

@@ -267,34 +267,6 @@ TEST(JudgeTest, AgreeingAnchoredMapsThatPutTheQueryElsewhereMakeItNotSure) {
   EXPECT_TRUE(Judge(&unchecked, off).sure);
 }
 
-// An anchored hit that puts the query 3 m away on the site is a rival,
-// unless it fits the best hit's pose as well (min_score) and the best map
-// clearly does not fit its pose: then that map alone is ambiguous.
-TEST(JudgeTest, AnAnchoredRivalThatFitsTheBestPoseTooIsNoRivalWhereTheBestMapRejectsItsPose) {
-  const Maps& m = TheMaps();
-  const Pose2 site{10.0, 5.0, 0.3};
-  auto judged = [&](double fit_at_best, double best_fit_here, const ConfidenceOptions& options) {
-    std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, site},
-                                   {0.8, kQueryPose, &m.room, false, Compose(site, {3.0, 0.0, 0.0})}};
-    hits[1].fit_at_best = fit_at_best;
-    hits[1].best_fit_here = best_fit_here;
-    return Judge(&hits, options);
-  };
-  const ConfidenceOptions options;
-  const Verdict dismissed = judged(0.7, 0.4, options);
-  EXPECT_TRUE(dismissed.sure);
-  EXPECT_DOUBLE_EQ(dismissed.rival_score, 0.0);
-  EXPECT_EQ(dismissed.agreeing, 0u);  // nor does it agree
-  EXPECT_FALSE(judged(-1.0, -1.0, options).sure);  // not measured: a rival
-  EXPECT_FALSE(judged(0.5, 0.4, options).sure);    // it does not fit the best pose
-  EXPECT_FALSE(judged(0.7, 0.8, options).sure);    // the best map fits its pose too
-  ConfidenceOptions off;
-  off.cross_check_rivals = false;
-  const Verdict unchecked = judged(0.7, 0.4, off);
-  EXPECT_FALSE(unchecked.sure);
-  EXPECT_DOUBLE_EQ(unchecked.rival_score, 0.8);
-}
-
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict close = Judge(&hits, ThresholdsOnly(), 0.75);
