@@ -54,20 +54,16 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
   // they agree, but not on the best hit's pose within what a sure answer
   // promises, the pose is not known that well.
   if (best.collection_pose && options.max_pose_spread_m > 0) {
-    std::vector<double> xs, ys, thetas;
+    std::vector<Pose2> offsets;  // in the best hit's site frame
     for (size_t i = 1; i < hits->size(); ++i) {
       const JudgedHit& h = (*hits)[i];
       if (!h.agrees_with_best || !h.collection_pose || h.score < options.min_score) continue;
-      const Pose2 d = Compose(Inverse(*best.collection_pose), *h.collection_pose);
-      xs.push_back(d.x), ys.push_back(d.y), thetas.push_back(std::remainder(d.theta, 2 * M_PI));
+      offsets.push_back(Compose(Inverse(*best.collection_pose), *h.collection_pose));
     }
-    if (xs.size() >= 2) {
-      auto median = [](std::vector<double> v) {
-        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-        return v[v.size() / 2];
-      };
-      v.pose_spread_m = std::hypot(median(xs), median(ys));
-      v.pose_spread_deg = std::abs(median(thetas)) * 180 / M_PI;
+    if (offsets.size() >= 2) {
+      const Pose2 median = ComponentMedian(offsets);
+      v.pose_spread_m = std::hypot(median.x, median.y);
+      v.pose_spread_deg = std::abs(median.theta) * 180 / M_PI;
     }
   }
   const double margin = v.best_score - v.rival_score;

@@ -40,6 +40,12 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
   return Scored(query, db, m, options);
 }
 
+std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits) {
+  std::vector<JudgedHit> judged;
+  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
+  return judged;
+}
+
 void SortHits(std::vector<LocalizedHit>* hits) {
   // Equal scores (a map that explains every query point, and its route
   // neighbour that does too): the one that explains them more closely first.
@@ -98,8 +104,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
       best = std::move(refined);
     }
   }
-  std::vector<JudgedHit> judged;
-  for (const LocalizedHit& h : hits) judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
+  std::vector<JudgedHit> judged = AsJudged(hits);
   out->verdict = Judge(&judged, options.confidence);
   // Only a sure verdict can be overturned by another pose of the best map.
   if (out->verdict.sure && second_pose) {
@@ -144,13 +149,7 @@ std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const 
                        std::remainder(h.collection_pose->theta - best.theta, 2 * M_PI)});
   }
   if (offsets.size() < 3) return std::nullopt;
-  auto median = [&](double Pose2::*field) {
-    std::vector<double> v;
-    for (const Pose2& o : offsets) v.push_back(o.*field);
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  const Pose2 mid{median(&Pose2::x), median(&Pose2::y), median(&Pose2::theta)};
+  const Pose2 mid = ComponentMedian(offsets);
   Pose2 sum{0, 0, 0};
   size_t kept = 0;
   for (const Pose2& o : offsets) {

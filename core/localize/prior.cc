@@ -206,8 +206,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   if (options.prior_stage_when_unsure && options.prior_first_stage && !tight) {
     std::vector<LocalizedHit> kept = hits;
     keep_each_once(&kept);
-    std::vector<JudgedHit> as_judged;
-    for (const LocalizedHit& h : kept) as_judged.push_back({h.score, h.pose, h.db.get(), false, h.collection_pose});
+    std::vector<JudgedHit> as_judged = AsJudged(kept);
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
   }
   const std::vector<MapSource::Anchored> near =

@@ -63,6 +63,9 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
 std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passed,
                                             const std::vector<LocalizedHit>& hits, const LocalizeOptions& options);
 
+// `hits` as the verdict sees them (confidence.h), in the same order.
+std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits);
+
 // Best first: score, then the closer fit, then the map id.
 void SortHits(std::vector<LocalizedHit>* hits);
 

@@ -2,7 +2,9 @@
 // truth. Header-only, all inline.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/types.h"
 
@@ -31,6 +33,20 @@ inline Pose2 Inverse(const Pose2& a) {
 inline Point2 TransformPoint(const Pose2& a, const Point2& p) {
   const double c = std::cos(a.theta), s = std::sin(a.theta);
   return {a.x + c * p.x - s * p.y, a.y + s * p.x + c * p.y};
+}
+
+// Median of each component of `poses` (the upper one for an even count);
+// headings as given, so wrap them around a common reference first. Empty
+// input: the identity.
+inline Pose2 ComponentMedian(const std::vector<Pose2>& poses) {
+  if (poses.empty()) return {};
+  auto median = [&](double Pose2::*field) {
+    std::vector<double> v;
+    for (const Pose2& p : poses) v.push_back(p.*field);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  return {median(&Pose2::x), median(&Pose2::y), median(&Pose2::theta)};
 }
 
 }  // namespace lmd

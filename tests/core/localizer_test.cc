@@ -400,6 +400,27 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   EXPECT_GT(higher, 0u) << "of " << queries;  // 4 of 147 when written
 }
 
+// A 40 m hall (a cupboard in its west end: the corner is not symmetric)
+// whose one stored map saw the west end only, and a query map of its middle.
+struct HallMaps {
+  LocalMap stored, query;
+};
+HallMaps HallSeenFromItsWestEnd() {
+  std::vector<Segment> walls;
+  AddBox(&walls, 0, 0, 40, 6);
+  AddBox(&walls, 1.0, 0.6, 1.8, 1.6);
+  const World hall(std::move(walls), {});
+  std::vector<Pose2> west_end, middle;
+  for (double x = 3.0; x <= 4.0; x += 0.25) west_end.push_back({x, 3.0, M_PI});
+  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
+  return {ScannedMap(hall, west_end, 180.0, 11), ScannedMap(hall, middle, 360.0, 12)};
+}
+
+void StoreAnchoredHall(const LocalMap& stored, MemoryCollection* collection) {
+  ASSERT_TRUE(collection->Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
+  ASSERT_TRUE(collection->SetAnchor(1, stored.truth.global_frame));
+}
+
 // A loose prior runs the first stage only where the maps nearest it leave
 // the answer unsure: where they make it sure, the stage is skipped and the
 // answer is as right as with it; a query whose only nearby map fits weakly
@@ -423,20 +444,11 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
   EXPECT_GE(skipped, queries / 2) << "of " << queries;
   EXPECT_EQ(skipped_right, skipped);
 
-  std::vector<Segment> walls;  // a hall whose one stored map saw its west end only
-  AddBox(&walls, 0, 0, 40, 6);
-  AddBox(&walls, 1.0, 0.6, 1.8, 1.6);
-  const World hall(std::move(walls), {});
-  std::vector<Pose2> west_end, middle;
-  for (double x = 3.0; x <= 4.0; x += 0.25) west_end.push_back({x, 3.0, M_PI});
-  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
-  const LocalMap stored = ScannedMap(hall, west_end, 180.0, 11);
-  const LocalMap map = ScannedMap(hall, middle, 360.0, 12);
+  const HallMaps hall = HallSeenFromItsWestEnd();  // its only stored map fits the query weakly
   MemoryCollection one_map;
-  ASSERT_TRUE(one_map.Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
-  ASSERT_TRUE(one_map.SetAnchor(1, stored.truth.global_frame));
-  const Localization weak = LocalizeNear(PrepareLocalQuery(map, kOptions), one_map, kOptions,
-                                         PriorOff(map.truth.global_frame, {1.5, -1.0, 12.0}, 3.5, 20.0));
+  StoreAnchoredHall(hall.stored, &one_map);
+  const Localization weak = LocalizeNear(PrepareLocalQuery(hall.query, kOptions), one_map, kOptions,
+                                         PriorOff(hall.query.truth.global_frame, {1.5, -1.0, 12.0}, 3.5, 20.0));
   EXPECT_FALSE(weak.verdict.sure);
   EXPECT_GT(weak.stats.search.lookups, 0u);
 }
@@ -446,20 +458,11 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
 // a query that saw all of it, too small for the search's min_score, yet it
 // shows where the query is.
 TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
-  std::vector<Segment> walls;
-  AddBox(&walls, 0, 0, 40, 6);
-  AddBox(&walls, 1.0, 0.6, 1.8, 1.6);  // a cupboard in the west end: the corner is not symmetric
-  const World hall(std::move(walls), {});
-  std::vector<Pose2> west_end, middle;
-  for (double x = 3.0; x <= 4.0; x += 0.25) west_end.push_back({x, 3.0, M_PI});
-  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
-  const LocalMap stored = ScannedMap(hall, west_end, 180.0, 11);
-  const LocalMap map = ScannedMap(hall, middle, 360.0, 12);
+  const HallMaps hall = HallSeenFromItsWestEnd();
   MemoryCollection collection;
-  ASSERT_TRUE(collection.Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
-  ASSERT_TRUE(collection.SetAnchor(1, stored.truth.global_frame));
-  const LocalQuery query = PrepareLocalQuery(map, kOptions);
-  const Pose2 truth = map.truth.global_frame;
+  StoreAnchoredHall(hall.stored, &collection);
+  const LocalQuery query = PrepareLocalQuery(hall.query, kOptions);
+  const Pose2 truth = hall.query.truth.global_frame;
   const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
   LocalizeOptions nearest_only = kOptions;  // the first stage would find it too
   nearest_only.prior_first_stage = false;
