@@ -416,7 +416,7 @@ HallMaps HallSeenFromItsWestEnd() {
   return {ScannedMap(hall, west_end, 180.0, 11), ScannedMap(hall, middle, 360.0, 12)};
 }
 
-void StoreAnchoredHall(const LocalMap& stored, MemoryCollection* collection) {
+void StoreAnchoredAtItsTruth(const LocalMap& stored, MemoryCollection* collection) {
   ASSERT_TRUE(collection->Add(1, PreparePlace(stored, kOptions), MapSource::Route{1, 1}, stored.trajectory).ok());
   ASSERT_TRUE(collection->SetAnchor(1, stored.truth.global_frame));
 }
@@ -446,11 +446,46 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
 
   const HallMaps hall = HallSeenFromItsWestEnd();  // its only stored map fits the query weakly
   MemoryCollection one_map;
-  StoreAnchoredHall(hall.stored, &one_map);
+  StoreAnchoredAtItsTruth(hall.stored, &one_map);
   const Localization weak = LocalizeNear(PrepareLocalQuery(hall.query, kOptions), one_map, kOptions,
                                          PriorOff(hall.query.truth.global_frame, {1.5, -1.0, 12.0}, 3.5, 20.0));
   EXPECT_FALSE(weak.verdict.sure);
   EXPECT_GT(weak.stats.search.lookups, 0u);
+}
+
+// A 3 m corridor that bends by 30 deg: its stored map saw the straight
+// stretch before the bend, the query the stretch after it. Each map's
+// compass follows the walls it saw most of, so the two compasses tell the
+// turn between the maps 30 deg off: walls that do not meet at right angles
+// are what the entropy compass cannot read.
+HallMaps CorridorBentBy30Deg() {
+  const double c = std::cos(Deg(30)), s = std::sin(Deg(30));
+  const std::vector<Segment> walls = {
+      {{-20, 0}, {0, 0}}, {{0, 0}, {20 * c, 20 * s}}, {{-20, 3}, {-0.804, 3}}, {{-0.804, 3}, {-0.804 + 20 * c, 3 + 20 * s}}};
+  const World corridor(walls, {});
+  std::vector<Pose2> before, after;
+  for (double x = -10.0; x <= -3.0; x += 0.25) before.push_back({x, 1.5, 0.0});
+  for (double d = 3.0; d <= 9.0; d += 0.25) after.push_back({-0.75 + d * c, 1.3 + d * s, Deg(30)});
+  return {ScannedMap(corridor, before, 360.0, 21), ScannedMap(corridor, after, 360.0, 22)};
+}
+
+// Where the compasses misread the turn, a loose prior's map is searched
+// again over the prior's whole heading range and found.
+TEST(LocalizerTest, ALoosePriorFindsAMapWhoseCompassMisreadsTheTurn) {
+  const HallMaps bend = CorridorBentBy30Deg();
+  MemoryCollection collection;
+  StoreAnchoredAtItsTruth(bend.stored, &collection);
+  const LocalQuery query = PrepareLocalQuery(bend.query, kOptions);
+  const Pose2 truth = bend.query.truth.global_frame;
+  const double turn_error = std::remainder(TruePose(bend.query, bend.stored).theta -
+                                               (collection.Prepared(1)->heading - query.map->heading),
+                                           M_PI / 2);
+  ASSERT_GT(std::abs(turn_error), Deg(10));  // the compasses misread the turn
+  const Localization l = LocalizeNear(query, collection, kOptions, PriorOff(truth, {1.0, -0.5, -12.0}, 3.5, 20.0));
+  ASSERT_FALSE(l.hits.empty());
+  ASSERT_TRUE(l.verdict.collection_pose);
+  EXPECT_LT(TranslationError(*l.verdict.collection_pose, truth), 0.1);
+  EXPECT_LT(AngleErrorDeg(*l.verdict.collection_pose, truth), 0.5);
 }
 
 // The maps nearest a prior are searched for their best pose however weak: a
@@ -460,7 +495,7 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
 TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
   const HallMaps hall = HallSeenFromItsWestEnd();
   MemoryCollection collection;
-  StoreAnchoredHall(hall.stored, &collection);
+  StoreAnchoredAtItsTruth(hall.stored, &collection);
   const LocalQuery query = PrepareLocalQuery(hall.query, kOptions);
   const Pose2 truth = hall.query.truth.global_frame;
   const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
