@@ -39,7 +39,11 @@ Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& an
                  double window_deg, double* search_window_deg);
 
 // Localises `query` near `prior` among `source`'s anchored maps (the prior
-// disk grown by the query's own extent). Hits carry collection_pose. The
+// disk grown by the query's own extent). Each map is searched from the turn
+// the maps' compasses give (PriorGuess); where nothing fits within a loose
+// prior, the nearest maps again over the prior's whole heading range (a
+// compass misreads the turn where walls do not meet at right angles).
+// Hits carry collection_pose. The
 // verdict's rivals are the other maps' disagreeing hits and the best map at
 // another pose within the prior window. verdict.prior_failed when no map
 // scores options.confidence.min_score there: the robot's prior is wrong (or
