@@ -292,13 +292,12 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // median / p99. Loose priors only: a tight prior's heading window is a few
   // degrees (--mode tracking gained no answer), and a sequence checks many
   // windows where nothing fits (+56 % CPU, no answer gained).
-  if (loose) {
-    std::vector<LocalizedHit> kept = hits;
-    keep_each_once(&kept);
-    if (kept.empty() || kept[0].score < options.confidence.min_score) {
-      for (LocalizedHit& hit : CompassFreePoses(query, source, prior, nearest, hits, near_match, options, &out.stats)) {
-        hits.push_back(std::move(hit));
-      }
+  const bool fits_inside = std::any_of(hits.begin(), hits.end(), [&](const LocalizedHit& h) {
+    return h.score >= options.confidence.min_score && inside(h.map_id, h.pose);
+  });
+  if (loose && !fits_inside) {
+    for (LocalizedHit& hit : CompassFreePoses(query, source, prior, nearest, hits, near_match, options, &out.stats)) {
+      hits.push_back(std::move(hit));
     }
   }
   keep_each_once(&hits);

@@ -111,6 +111,12 @@ Localization LocalizeIn(const MemoryCollection& collection, const LocalMap& quer
   return Localize(PrepareLocalQuery(query_map, options), collection, options, excluded, stop, with_changes);
 }
 
+// The answer's site pose within 0.1 m and 0.5 deg of `truth`.
+bool SitePoseAt(const Localization& l, const Pose2& truth) {
+  return l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
+         AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
+}
+
 // A demo map shows the query's place when most query points lie on it.
 bool ShowsPlace(const LocalMap& query, const LocalMap& db) { return PlaceOverlap(query, db) >= 0.5; }
 
@@ -358,11 +364,7 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
     EXPECT_GT(c.stats.search.lookups, 0u) << q;
     EXPECT_LE(a.stats.maps_matched, kOptions.tight_prior_maps) << q;
     more_matched += a.stats.maps_matched > kOptions.prior_maps;
-    auto right = [&](const Localization& l) {
-      return l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
-             AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
-    };
-    right_tight += right(a), right_loose += right(b);
+    right_tight += SitePoseAt(a, truth), right_loose += SitePoseAt(b, truth);
   }
   // Where more maps lie near the prior than prior_maps, more are verified.
   EXPECT_GE(more_matched, queries / 2) << "of " << queries;
@@ -438,8 +440,7 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
     if (l.stats.search.lookups != 0) continue;
     ++skipped;
     EXPECT_TRUE(l.verdict.sure) << q;
-    skipped_right += l.verdict.collection_pose && TranslationError(*l.verdict.collection_pose, truth) < 0.1 &&
-                     AngleErrorDeg(*l.verdict.collection_pose, truth) < 0.5;
+    skipped_right += SitePoseAt(l, truth);
   }
   EXPECT_GE(skipped, queries / 2) << "of " << queries;
   EXPECT_EQ(skipped_right, skipped);
@@ -482,10 +483,7 @@ TEST(LocalizerTest, ALoosePriorFindsAMapWhoseCompassMisreadsTheTurn) {
                                            M_PI / 2);
   ASSERT_GT(std::abs(turn_error), Deg(10));  // the compasses misread the turn
   const Localization l = LocalizeNear(query, collection, kOptions, PriorOff(truth, {1.0, -0.5, -12.0}, 3.5, 20.0));
-  ASSERT_FALSE(l.hits.empty());
-  ASSERT_TRUE(l.verdict.collection_pose);
-  EXPECT_LT(TranslationError(*l.verdict.collection_pose, truth), 0.1);
-  EXPECT_LT(AngleErrorDeg(*l.verdict.collection_pose, truth), 0.5);
+  EXPECT_TRUE(SitePoseAt(l, truth));
 }
 
 // The maps nearest a prior are searched for their best pose however weak: a
@@ -506,9 +504,7 @@ TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
   const Localization weak = LocalizeNear(query, collection, nearest_only, loose);
   const Localization kept = LocalizeNear(query, collection, strict, loose);
   ASSERT_FALSE(weak.hits.empty());
-  ASSERT_TRUE(weak.verdict.collection_pose);
-  EXPECT_LT(TranslationError(*weak.verdict.collection_pose, truth), 0.1);
-  EXPECT_LT(AngleErrorDeg(*weak.verdict.collection_pose, truth), 0.5);
+  EXPECT_TRUE(SitePoseAt(weak, truth));
   EXPECT_LT(weak.hits[0].score, kOptions.confidence.min_score);  // a weak fit: not sure, yet the right pose
   // Above min_score only, the search found nothing and the pose stayed at the prior's guess.
   ASSERT_TRUE(kept.verdict.collection_pose);
