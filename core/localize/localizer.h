@@ -164,6 +164,20 @@ struct LocalizeOptions {
   // there a weak fit of an earlier map props up a wrong hypothesis (place@1
   // .887 -> .882 with it).
   bool prior_weak_fits = true;
+  // Where no map fits within a prior that is not tight (nothing reaches
+  // confidence.min_score inside it), the best-bounded prior_maps of all the
+  // anchored maps near the prior that were not verified yet are verified
+  // too. The maps whose robots drove nearest show a place from the usual
+  // spots; outdoors a map made tens of metres away can be the one that
+  // shows it. Found on frcampus (held out, looked at): of its 29
+  // lmd-eval prior-misses with an unverified map of the place that fits,
+  // that map was among the 24 nearest by path for 5, and among all the
+  // 180-680 maps near the prior first by the bound for 10, within the
+  // first 6 for 19.
+  // No threshold of its own. Served (lmd-eval served --mode prior
+  // --no-changes, back to back): see docs/results.md. A sequence's check
+  // skips it (its windows are the odometry's, and they often fit nothing).
+  bool prior_any_near_maps = true;
   // A tight prior (radius and heading sigma at most these), as a tracking
   // robot sends after a fix, skips the first stage (with prior_first_stage
   // on) and has the tight_prior_maps best-bounded of the 4 x as many maps

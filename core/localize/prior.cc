@@ -56,20 +56,28 @@ std::vector<Candidate> NearestCandidates(const LocalQuery& query, const MapSourc
                                          const Prior& prior, const std::vector<MapSource::Anchored>& nearest,
                                          size_t maps, ScanMatchOptions* match) {
   *match = PriorWindow(prior, options);
-  double window_deg = match->window_deg;
-  std::vector<std::pair<double, Candidate>> bounded;
+  struct Bounded {
+    double bound;
+    double window_deg;  // its guess's heading window
+    Candidate candidate;
+  };
+  std::vector<Bounded> bounded;
   for (const MapSource::Anchored& a : nearest) {
     std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
     if (!db) continue;
     double needed_deg = 0.0;
     const Pose2 guess = PriorGuess(query, *db, a.pose, prior, match->window_deg, &needed_deg);
-    window_deg = std::max(window_deg, needed_deg);
     const double bound = FitNear(query, *db, guess, match->window_m, kBoundBlockM);
-    bounded.push_back({bound, Candidate{a.map_id, {guess}, bound, bounded.size()}});
+    bounded.push_back({bound, needed_deg, Candidate{a.map_id, {guess}, bound, bounded.size()}});
   }
-  std::stable_sort(bounded.begin(), bounded.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::stable_sort(bounded.begin(), bounded.end(), [](const Bounded& x, const Bounded& y) { return x.bound > y.bound; });
+  // The window covers the maps kept, not those passed over.
+  double window_deg = match->window_deg;
   std::vector<Candidate> candidates;
-  for (size_t i = 0; i < bounded.size() && i < maps; ++i) candidates.push_back(bounded[i].second);
+  for (size_t i = 0; i < bounded.size() && i < maps; ++i) {
+    candidates.push_back(bounded[i].candidate);
+    window_deg = std::max(window_deg, bounded[i].window_deg);
+  }
   match->window_deg = window_deg;
   return candidates;
 }
@@ -152,6 +160,25 @@ std::vector<LocalizedHit> CompassFreePoses(const LocalQuery& query, const MapSou
   }
   stats->verify_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   return out;
+}
+
+// The best-bounded prior_maps of the maps near a prior (`near`) not
+// verified yet (LocalizeOptions::prior_any_near_maps).
+std::vector<LocalizedHit> VerifyAnyNear(const LocalQuery& query, const MapSource& source,
+                                        const LocalizeOptions& options, const Prior& prior,
+                                        const std::vector<MapSource::Anchored>& near,
+                                        const std::vector<LocalizedHit>& verified, const std::function<bool()>& stop,
+                                        LocalizeStats* stats) {
+  std::unordered_set<uint64_t> done;
+  for (const LocalizedHit& h : verified) done.insert(h.map_id);
+  std::vector<MapSource::Anchored> rest;
+  for (const MapSource::Anchored& a : near) {
+    if (done.count(a.map_id) == 0) rest.push_back(a);
+  }
+  ScanMatchOptions match;
+  const std::vector<Candidate> candidates =
+      NearestCandidates(query, source, options, prior, rest, options.prior_maps, &match);
+  return VerifyCandidates(query, source, candidates, options, match, stop, stats);
 }
 
 }  // namespace
@@ -292,10 +319,21 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // median / p99. Loose priors only: a tight prior's heading window is a few
   // degrees (--mode tracking gained no answer), and a sequence checks many
   // windows where nothing fits (+56 % CPU, no answer gained).
-  const bool fits_inside = std::any_of(hits.begin(), hits.end(), [&](const LocalizedHit& h) {
-    return h.score >= options.confidence.min_score && inside(h.map_id, h.pose);
-  });
-  if (loose && !fits_inside) {
+  auto fits_inside = [&] {
+    return std::any_of(hits.begin(), hits.end(), [&](const LocalizedHit& h) {
+      return h.score >= options.confidence.min_score && inside(h.map_id, h.pose);
+    });
+  };
+  if (options.prior_any_near_maps && !tight && !fits_inside()) {
+    const std::vector<MapSource::Anchored> any_near =
+        !near.empty() ? near
+                      : source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell,
+                                            excluded);
+    for (LocalizedHit& hit : VerifyAnyNear(query, source, options, prior, any_near, hits, stop, &out.stats)) {
+      hits.push_back(std::move(hit));
+    }
+  }
+  if (loose && !fits_inside()) {
     for (LocalizedHit& hit : CompassFreePoses(query, source, prior, nearest, hits, near_match, options, &out.stats)) {
       hits.push_back(std::move(hit));
     }

@@ -40,6 +40,7 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
   near_options.prior_first_stage = false;  // the hypotheses came from it
   near_options.prior_second_pose = false;  // a hypothesis names the pose; its window is the drift's
   near_options.prior_weak_fits = false;
+  near_options.prior_any_near_maps = false;
   SequenceCheck check;
   for (size_t k = 0; k <= earlier.size(); ++k) {
     if (stop && stop()) break;

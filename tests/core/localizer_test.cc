@@ -486,6 +486,49 @@ TEST(LocalizerTest, ALoosePriorFindsAMapWhoseCompassMisreadsTheTurn) {
   EXPECT_TRUE(SitePoseAt(l, truth));
 }
 
+// A 40 m hall whose only map of its middle was made from its east part:
+// the query's robot crossed the middle, where four other
+// robots mapped a room of another site (anchored there in error, or the
+// hall before it was cleared). Those four drove nearest the query, so they
+// are the maps a prior verifies first, and none fits; the map made 8 m away
+// is found among all the maps near the prior.
+TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
+  std::vector<Segment> walls;
+  AddBox(&walls, 0, 0, 40, 6);
+  AddBox(&walls, 10.0, 0.6, 11.0, 1.4);  // a cupboard and a pillar: the middle is not a plain corridor
+  AddBox(&walls, 16.0, 4.0, 16.6, 4.6);
+  const World hall(std::move(walls), {});
+  std::vector<Pose2> east, middle;
+  for (double x = 22.0; x <= 23.0; x += 0.25) east.push_back({x, 3.0, M_PI});
+  for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
+  const LocalMap made_afar = ScannedMap(hall, east, 360.0, 31);
+  const LocalMap query_map = ScannedMap(hall, middle, 360.0, 32);
+  MemoryCollection collection;
+  StoreAnchoredAtItsTruth(made_afar, &collection);
+  for (uint64_t id = 2; id <= 5; ++id) {
+    const LocalMap room = StoredRoom({0, 0}, true, 40 + id);
+    ASSERT_TRUE(collection.Add(id, PreparePlace(room, kOptions), MapSource::Route{id, 1}, room.trajectory).ok());
+    // The room's robot path (y = 4.4 from x = 1.5) laid on the query's.
+    ASSERT_TRUE(collection.SetAnchor(id, Pose2{12.0 - 0.1 * static_cast<double>(id), 3.2, 0.0}));
+  }
+  const LocalQuery query = PrepareLocalQuery(query_map, kOptions);
+  const Pose2 truth = query_map.truth.global_frame;
+  LocalizeOptions one_nearest = kOptions;  // 4 maps bounded, the best verified
+  one_nearest.prior_maps = 1;
+  one_nearest.prior_first_stage = false;  // the stage finds it too: here the nearest maps alone
+  LocalizeOptions nearest_only = one_nearest;
+  nearest_only.prior_any_near_maps = false;
+  const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
+  const Localization any_near = LocalizeNear(query, collection, one_nearest, loose);
+  const Localization nearest = LocalizeNear(query, collection, nearest_only, loose);
+  ASSERT_FALSE(any_near.hits.empty());
+  EXPECT_EQ(any_near.hits[0].map_id, 1u);
+  EXPECT_TRUE(SitePoseAt(any_near, truth));
+  EXPECT_FALSE(any_near.verdict.prior_failed);
+  EXPECT_TRUE(nearest.hits.empty() || nearest.hits[0].map_id != 1u);
+  EXPECT_TRUE(nearest.verdict.prior_failed);
+}
+
 // The maps nearest a prior are searched for their best pose however weak: a
 // stored map that saw only the west end of a hall explains a small share of
 // a query that saw all of it, too small for the search's min_score, yet it
