@@ -312,18 +312,14 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       hits.push_back(std::move(hit));
     }
   }
-  // Where no map fits within the prior at the compass's turn, the compass
-  // may be what failed. Served (lmd-eval served --mode prior --no-changes,
-  // back to back, 2026-12-05): place@1 held out .978 -> .985, tuned on .986
-  // -> .988, sure and wrong 50 -> 48, lmdd CPU 9.4 / 42.8 -> 9.6 / 55.7 ms
-  // median / p99. Loose priors only: a tight prior's heading window is a few
-  // degrees (--mode tracking gained no answer), and a sequence checks many
-  // windows where nothing fits (+56 % CPU, no answer gained).
+  // Whether a hit within the prior fits (reaches the verdict's min_score).
   auto fits_inside = [&] {
     return std::any_of(hits.begin(), hits.end(), [&](const LocalizedHit& h) {
       return h.score >= options.confidence.min_score && inside(h.map_id, h.pose);
     });
   };
+  // Where none fits, a map near the prior that none of the above verified
+  // (LocalizeOptions::prior_any_near_maps).
   if (options.prior_any_near_maps && !tight && !fits_inside()) {
     const std::vector<MapSource::Anchored> any_near =
         !near.empty() ? near
@@ -333,6 +329,13 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       hits.push_back(std::move(hit));
     }
   }
+  // Where still none fits at the compass's turn, the compass may be what
+  // failed. Served (lmd-eval served --mode prior --no-changes, back to back,
+  // 2026-12-05): place@1 held out .978 -> .985, tuned on .986 -> .988, sure
+  // and wrong 50 -> 48, lmdd CPU 9.4 / 42.8 -> 9.6 / 55.7 ms median / p99.
+  // Loose priors only: a tight prior's heading window is a few degrees
+  // (--mode tracking gained no answer), and a sequence checks many windows
+  // where nothing fits (+56 % CPU, no answer gained).
   if (loose && !fits_inside()) {
     for (LocalizedHit& hit : CompassFreePoses(query, source, prior, nearest, hits, near_match, options, &out.stats)) {
       hits.push_back(std::move(hit));
