@@ -180,6 +180,10 @@ struct LocalizeOptions {
   // lmdd CPU 9.8 / 57.0 -> 10.3 / 68.5 ms median / p99. A sequence's check
   // skips it (its windows are the odometry's, and they often fit nothing).
   bool prior_any_near_maps = true;
+  // ... bounding at most this many of them, the newest (10 us a map): where
+  // a fleet piles up maps, the maps near a prior run into thousands. The
+  // nine logs of ../shared/data have at most 680 near a prior.
+  size_t prior_any_near_max_maps = 1000;
   // A tight prior (radius and heading sigma at most these), as a tracking
   // robot sends after a fix, skips the first stage (with prior_first_stage
   // on) and has the tight_prior_maps best-bounded of the 4 x as many maps

@@ -175,6 +175,11 @@ std::vector<LocalizedHit> VerifyAnyNear(const LocalQuery& query, const MapSource
   for (const MapSource::Anchored& a : near) {
     if (done.count(a.map_id) == 0) rest.push_back(a);
   }
+  if (rest.size() > options.prior_any_near_max_maps) {  // the newest: they show the place as it is now
+    std::sort(rest.begin(), rest.end(),
+              [](const MapSource::Anchored& a, const MapSource::Anchored& b) { return a.map_id > b.map_id; });
+    rest.resize(options.prior_any_near_max_maps);
+  }
   ScanMatchOptions match;
   const std::vector<Candidate> candidates =
       NearestCandidates(query, source, options, prior, rest, options.prior_maps, &match);

@@ -527,6 +527,12 @@ TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
   EXPECT_FALSE(any_near.verdict.prior_failed);
   EXPECT_TRUE(nearest.hits.empty() || nearest.hits[0].map_id != 1u);
   EXPECT_TRUE(nearest.verdict.prior_failed);
+  // Bounding only the newest 3 of the 4 maps not verified leaves out the
+  // oldest, the map made afar.
+  LocalizeOptions newest_three = one_nearest;
+  newest_three.prior_any_near_max_maps = 3;
+  const Localization capped = LocalizeNear(query, collection, newest_three, loose);
+  EXPECT_TRUE(capped.verdict.prior_failed);
 }
 
 // The maps nearest a prior are searched for their best pose however weak: a
