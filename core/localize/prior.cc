@@ -283,10 +283,12 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     std::vector<JudgedHit> as_judged = AsJudged(kept);
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
   }
+  // The anchored maps that can overlap the prior region.
+  auto anchored_near = [&] {
+    return source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell, excluded);
+  };
   const std::vector<MapSource::Anchored> near =
-      loose && !nearest_sure
-          ? source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell, excluded)
-          : std::vector<MapSource::Anchored>{};
+      loose && !nearest_sure ? anchored_near() : std::vector<MapSource::Anchored>{};
   if (!near.empty()) {
     std::vector<uint64_t> ids;
     for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);
@@ -324,13 +326,13 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     });
   };
   // Where none fits, a map near the prior that none of the above verified
-  // (LocalizeOptions::prior_any_near_maps).
+  // (LocalizeOptions::prior_any_near_maps). A loose prior has read those
+  // maps already: with nothing fitting, its nearest maps were not sure.
   if (options.prior_any_near_maps && !tight && !fits_inside()) {
-    const std::vector<MapSource::Anchored> any_near =
-        !near.empty() ? near
-                      : source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell,
-                                            excluded);
-    for (LocalizedHit& hit : VerifyAnyNear(query, source, options, prior, any_near, hits, stop, &out.stats)) {
+    std::vector<MapSource::Anchored> read_here;
+    if (!loose) read_here = anchored_near();
+    for (LocalizedHit& hit :
+         VerifyAnyNear(query, source, options, prior, loose ? near : read_here, hits, stop, &out.stats)) {
       hits.push_back(std::move(hit));
     }
   }

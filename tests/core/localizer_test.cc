@@ -423,6 +423,18 @@ void StoreAnchoredAtItsTruth(const LocalMap& stored, MemoryCollection* collectio
   ASSERT_TRUE(collection->SetAnchor(1, stored.truth.global_frame));
 }
 
+// A site of one map: `maps.stored` anchored at its truth as map 1, and
+// `maps.query` prepared as a query.
+struct OneMapSite {
+  explicit OneMapSite(const HallMaps& maps)
+      : query(PrepareLocalQuery(maps.query, kOptions)), truth(maps.query.truth.global_frame) {
+    StoreAnchoredAtItsTruth(maps.stored, &collection);
+  }
+  MemoryCollection collection;
+  LocalQuery query;
+  Pose2 truth;
+};
+
 // A loose prior runs the first stage only where the maps nearest it leave
 // the answer unsure: where they make it sure, the stage is skipped and the
 // answer is as right as with it; a query whose only nearby map fits weakly
@@ -445,11 +457,9 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
   EXPECT_GE(skipped, queries / 2) << "of " << queries;
   EXPECT_EQ(skipped_right, skipped);
 
-  const HallMaps hall = HallSeenFromItsWestEnd();  // its only stored map fits the query weakly
-  MemoryCollection one_map;
-  StoreAnchoredAtItsTruth(hall.stored, &one_map);
-  const Localization weak = LocalizeNear(PrepareLocalQuery(hall.query, kOptions), one_map, kOptions,
-                                         PriorOff(hall.query.truth.global_frame, {1.5, -1.0, 12.0}, 3.5, 20.0));
+  const OneMapSite hall(HallSeenFromItsWestEnd());  // its only stored map fits the query weakly
+  const Localization weak =
+      LocalizeNear(hall.query, hall.collection, kOptions, PriorOff(hall.truth, {1.5, -1.0, 12.0}, 3.5, 20.0));
   EXPECT_FALSE(weak.verdict.sure);
   EXPECT_GT(weak.stats.search.lookups, 0u);
 }
@@ -474,16 +484,14 @@ HallMaps CorridorBentBy30Deg() {
 // again over the prior's whole heading range and found.
 TEST(LocalizerTest, ALoosePriorFindsAMapWhoseCompassMisreadsTheTurn) {
   const HallMaps bend = CorridorBentBy30Deg();
-  MemoryCollection collection;
-  StoreAnchoredAtItsTruth(bend.stored, &collection);
-  const LocalQuery query = PrepareLocalQuery(bend.query, kOptions);
-  const Pose2 truth = bend.query.truth.global_frame;
+  const OneMapSite site(bend);
   const double turn_error = std::remainder(TruePose(bend.query, bend.stored).theta -
-                                               (collection.Prepared(1)->heading - query.map->heading),
+                                               (site.collection.Prepared(1)->heading - site.query.map->heading),
                                            M_PI / 2);
   ASSERT_GT(std::abs(turn_error), Deg(10));  // the compasses misread the turn
-  const Localization l = LocalizeNear(query, collection, kOptions, PriorOff(truth, {1.0, -0.5, -12.0}, 3.5, 20.0));
-  EXPECT_TRUE(SitePoseAt(l, truth));
+  const Localization l =
+      LocalizeNear(site.query, site.collection, kOptions, PriorOff(site.truth, {1.0, -0.5, -12.0}, 3.5, 20.0));
+  EXPECT_TRUE(SitePoseAt(l, site.truth));
 }
 
 // A 40 m hall whose only map of its middle was made from its east part:
@@ -501,29 +509,24 @@ TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
   std::vector<Pose2> east, middle;
   for (double x = 22.0; x <= 23.0; x += 0.25) east.push_back({x, 3.0, M_PI});
   for (double x = 12.0; x <= 15.0; x += 0.25) middle.push_back({x, 3.2, 0.0});
-  const LocalMap made_afar = ScannedMap(hall, east, 360.0, 31);
-  const LocalMap query_map = ScannedMap(hall, middle, 360.0, 32);
-  MemoryCollection collection;
-  StoreAnchoredAtItsTruth(made_afar, &collection);
+  OneMapSite site({ScannedMap(hall, east, 360.0, 31), ScannedMap(hall, middle, 360.0, 32)});  // map 1: made afar
   for (uint64_t id = 2; id <= 5; ++id) {
     const LocalMap room = StoredRoom({0, 0}, true, 40 + id);
-    ASSERT_TRUE(collection.Add(id, PreparePlace(room, kOptions), MapSource::Route{id, 1}, room.trajectory).ok());
+    ASSERT_TRUE(site.collection.Add(id, PreparePlace(room, kOptions), MapSource::Route{id, 1}, room.trajectory).ok());
     // The room's robot path (y = 4.4 from x = 1.5) laid on the query's.
-    ASSERT_TRUE(collection.SetAnchor(id, Pose2{12.0 - 0.1 * static_cast<double>(id), 3.2, 0.0}));
+    ASSERT_TRUE(site.collection.SetAnchor(id, Pose2{12.0 - 0.1 * static_cast<double>(id), 3.2, 0.0}));
   }
-  const LocalQuery query = PrepareLocalQuery(query_map, kOptions);
-  const Pose2 truth = query_map.truth.global_frame;
   LocalizeOptions one_nearest = kOptions;  // 4 maps bounded, the best verified
   one_nearest.prior_maps = 1;
   one_nearest.prior_first_stage = false;  // the stage finds it too: here the nearest maps alone
   LocalizeOptions nearest_only = one_nearest;
   nearest_only.prior_any_near_maps = false;
-  const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
-  const Localization any_near = LocalizeNear(query, collection, one_nearest, loose);
-  const Localization nearest = LocalizeNear(query, collection, nearest_only, loose);
+  const Prior loose = PriorOff(site.truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
+  const Localization any_near = LocalizeNear(site.query, site.collection, one_nearest, loose);
+  const Localization nearest = LocalizeNear(site.query, site.collection, nearest_only, loose);
   ASSERT_FALSE(any_near.hits.empty());
   EXPECT_EQ(any_near.hits[0].map_id, 1u);
-  EXPECT_TRUE(SitePoseAt(any_near, truth));
+  EXPECT_TRUE(SitePoseAt(any_near, site.truth));
   EXPECT_FALSE(any_near.verdict.prior_failed);
   EXPECT_TRUE(nearest.hits.empty() || nearest.hits[0].map_id != 1u);
   EXPECT_TRUE(nearest.verdict.prior_failed);
@@ -531,7 +534,7 @@ TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
   // oldest, the map made afar.
   LocalizeOptions newest_three = one_nearest;
   newest_three.prior_any_near_max_maps = 3;
-  const Localization capped = LocalizeNear(query, collection, newest_three, loose);
+  const Localization capped = LocalizeNear(site.query, site.collection, newest_three, loose);
   EXPECT_TRUE(capped.verdict.prior_failed);
 }
 
@@ -540,24 +543,20 @@ TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
 // a query that saw all of it, too small for the search's min_score, yet it
 // shows where the query is.
 TEST(LocalizerTest, APriorsNearestMapsKeepTheirWeakFits) {
-  const HallMaps hall = HallSeenFromItsWestEnd();
-  MemoryCollection collection;
-  StoreAnchoredAtItsTruth(hall.stored, &collection);
-  const LocalQuery query = PrepareLocalQuery(hall.query, kOptions);
-  const Pose2 truth = hall.query.truth.global_frame;
-  const Prior loose = PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
+  const OneMapSite hall(HallSeenFromItsWestEnd());
+  const Prior loose = PriorOff(hall.truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
   LocalizeOptions nearest_only = kOptions;  // the first stage would find it too
   nearest_only.prior_first_stage = false;
   LocalizeOptions strict = nearest_only;
   strict.prior_weak_fits = false;
-  const Localization weak = LocalizeNear(query, collection, nearest_only, loose);
-  const Localization kept = LocalizeNear(query, collection, strict, loose);
+  const Localization weak = LocalizeNear(hall.query, hall.collection, nearest_only, loose);
+  const Localization kept = LocalizeNear(hall.query, hall.collection, strict, loose);
   ASSERT_FALSE(weak.hits.empty());
-  EXPECT_TRUE(SitePoseAt(weak, truth));
+  EXPECT_TRUE(SitePoseAt(weak, hall.truth));
   EXPECT_LT(weak.hits[0].score, kOptions.confidence.min_score);  // a weak fit: not sure, yet the right pose
   // Above min_score only, the search found nothing and the pose stayed at the prior's guess.
   ASSERT_TRUE(kept.verdict.collection_pose);
-  EXPECT_GT(TranslationError(*kept.verdict.collection_pose, truth), 0.5);
+  EXPECT_GT(TranslationError(*kept.verdict.collection_pose, hall.truth), 0.5);
 }
 
 // The site pose is the mean of the agreeing anchored maps that fit, within
