@@ -11,6 +11,9 @@
 namespace lmd {
 namespace {
 
+double KernelSigma(const PreparedMapOptions& o) { return std::max(1e-3, o.kernel_sigma_m); }
+int KernelReachCells(const PreparedMapOptions& o) { return static_cast<int>(std::ceil(3.0 * KernelSigma(o) / o.cell_m)); }
+
 // Level h from level h-1: max over the two half-blocks along x, then along y.
 // With next.pad = prev.pad + half, next's column jx covers prev's columns
 // jx - half and jx (and rows alike); prev is 0 outside its extent.
@@ -42,30 +45,36 @@ LikelihoodLevel NextLevel(const LikelihoodLevel& prev, int h) {
   return next;
 }
 
-void BuildPyramid(PreparedMap* m) {
+// The level-0 grid's extent: the points' box grown by the kernel's reach.
+void PlacePyramid(PreparedMap* m) {
   const PreparedMapOptions& o = m->options;
-  const double sigma = std::max(1e-3, o.kernel_sigma_m);
-  const double reach = 3.0 * sigma;
-  const int r = static_cast<int>(std::ceil(reach / o.cell_m));
+  const int r = KernelReachCells(o);
   m->grid_origin = {m->min_corner.x - (r + 1) * o.cell_m, m->min_corner.y - (r + 1) * o.cell_m};
   m->grid_width = static_cast<int>(std::ceil((m->max_corner.x - m->grid_origin.x) / o.cell_m)) + r + 2;
   m->grid_height = static_cast<int>(std::ceil((m->max_corner.y - m->grid_origin.y) / o.cell_m)) + r + 2;
+}
+
+std::vector<LikelihoodLevel> BuildPyramid(const PreparedMap& m) {
+  const PreparedMapOptions& o = m.options;
+  const double sigma = KernelSigma(o);
+  const double reach = 3.0 * sigma;
+  const int r = KernelReachCells(o);
   LikelihoodLevel base;
   base.pad = 0;
-  base.width = m->grid_width;
-  base.height = m->grid_height;
+  base.width = m.grid_width;
+  base.height = m.grid_height;
   base.values.assign(static_cast<size_t>(base.width) * base.height, 0);
   // The value falls with distance, so a cell's value is that of its nearest
   // point: find the smallest squared distance per cell, then one exp per cell.
   const double reach2 = reach * reach;
   std::vector<double> nearest2(base.values.size(), std::numeric_limits<double>::infinity());
-  for (const Point2& p : m->points) {
-    const int cx = static_cast<int>(std::floor((p.x - m->grid_origin.x) / o.cell_m));
-    const int cy = static_cast<int>(std::floor((p.y - m->grid_origin.y) / o.cell_m));
+  for (const Point2& p : m.points) {
+    const int cx = static_cast<int>(std::floor((p.x - m.grid_origin.x) / o.cell_m));
+    const int cy = static_cast<int>(std::floor((p.y - m.grid_origin.y) / o.cell_m));
     for (int y = std::max(0, cy - r); y <= std::min(base.height - 1, cy + r); ++y) {
-      const double dy = m->grid_origin.y + (y + 0.5) * o.cell_m - p.y;
+      const double dy = m.grid_origin.y + (y + 0.5) * o.cell_m - p.y;
       for (int x = std::max(0, cx - r); x <= std::min(base.width - 1, cx + r); ++x) {
-        const double dx = m->grid_origin.x + (x + 0.5) * o.cell_m - p.x;
+        const double dx = m.grid_origin.x + (x + 0.5) * o.cell_m - p.x;
         double& cell = nearest2[static_cast<size_t>(y) * base.width + x];
         cell = std::min(cell, dx * dx + dy * dy);
       }
@@ -75,9 +84,10 @@ void BuildPyramid(PreparedMap* m) {
   for (size_t k = 0; k < nearest2.size(); ++k) {
     if (nearest2[k] <= reach2) base.values[k] = static_cast<uint8_t>(std::lround(255.0 * std::exp(-nearest2[k] * inv2s2)));
   }
-  m->levels.clear();
-  m->levels.push_back(std::move(base));
-  for (int h = 1; h < o.levels; ++h) m->levels.push_back(NextLevel(m->levels.back(), h));
+  std::vector<LikelihoodLevel> levels;
+  levels.push_back(std::move(base));
+  for (int h = 1; h < o.levels; ++h) levels.push_back(NextLevel(levels.back(), h));
+  return levels;
 }
 
 // Sorts the points by bucket (row-major, stable), so that a bucket, and a
@@ -147,9 +157,21 @@ void BuildNormals(PreparedMap* m) {
 
 }  // namespace
 
+const std::vector<LikelihoodLevel>& PreparedMap::levels() const {
+  std::call_once(pyramid_->built, [this] {
+    if (!empty()) pyramid_->levels = BuildPyramid(*this);
+  });
+  return pyramid_->levels;
+}
+
 size_t PreparedMap::MemoryBytes() const {
   size_t bytes = (points.size() * 2 + sparse_points.size()) * sizeof(Point2) + bucket_start.size() * 4;
-  for (const LikelihoodLevel& l : levels) bytes += l.values.size();
+  if (!empty()) {
+    for (int h = 0; h < options.levels; ++h) {
+      const size_t pad = (size_t{1} << h) - 1;
+      bytes += (static_cast<size_t>(grid_width) + pad) * (static_cast<size_t>(grid_height) + pad);
+    }
+  }
   bytes += occupancy.cells().size();
   return bytes;
 }
@@ -175,7 +197,7 @@ PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOp
   }
   m.heading = known_heading ? *known_heading : EstimateDominantOrientation(m.points, options.orientation);
   m.sparse_points = DeduplicatePoints(m.points, std::max(0.01, options.sparse_cell_m));
-  BuildPyramid(&m);
+  PlacePyramid(&m);
   BuildBuckets(&m);
   BuildNormals(&m);
   return m;

@@ -13,6 +13,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -80,7 +82,11 @@ struct PreparedMap {
   // Likelihood pyramid; grid_origin = own-frame position of level-0 cell (0, 0)'s lower-left corner.
   Point2 grid_origin;
   int grid_width = 0, grid_height = 0;  // level-0 size in cells
-  std::vector<LikelihoodLevel> levels;
+  // The pyramid's levels, built on the first call (thread-safe) and shared
+  // by copies: only a map matched against needs them, and most of a
+  // fleet's maps are prepared as queries and stored but never matched
+  // against (the pyramid was half of preparing one).
+  const std::vector<LikelihoodLevel>& levels() const;
 
   // Free space of the db map (rotation 0); empty (0 x 0) when not built.
   OccupancyGrid occupancy;
@@ -92,13 +98,22 @@ struct PreparedMap {
   std::vector<uint32_t> bucket_start;   // size w*h + 1
 
   bool empty() const { return points.empty(); }
-  // Approximate heap size in bytes (for caches).
+  // Approximate heap size in bytes (for caches), the pyramid counted
+  // whether built yet or not.
   size_t MemoryBytes() const;
+
+ private:
+  struct LazyPyramid {
+    std::once_flag built;
+    std::vector<LikelihoodLevel> levels;
+  };
+  std::shared_ptr<LazyPyramid> pyramid_ = std::make_shared<LazyPyramid>();
 };
 
-// Builds the pyramid, buckets, normals and heading of `map`'s points (and its
-// free space, from its scans). Cost is linear in the point count plus the grid
-// area plus the beams (~2-10 ms for a real local map).
+// Builds the buckets, normals and heading of `map`'s points (and its free
+// space, from its scans); the pyramid follows on first use (levels()). Cost
+// is linear in the point count plus the grid area plus the beams (~2-10 ms
+// for a real local map, about half of it the pyramid).
 // Points that are not finite are dropped. Options out of range are clamped
 // (cell_m >= 0.01, levels in [1, 12]). `known_heading`: the entropy compass of
 // these points, when the caller has it already (a stored map's planned frame:

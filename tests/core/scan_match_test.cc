@@ -268,11 +268,11 @@ TEST(ScanMatchTest, CorrelativeBoundFromFinerBlocksStillBoundsTheSearch) {
 
 TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
   const PreparedMap m = PrepareMap(RichMap());
-  ASSERT_GE(m.levels.size(), 2u);
+  ASSERT_GE(m.levels().size(), 2u);
   // Level h at (x, y) is the max of level 0 over the 2^h block starting there.
-  const LikelihoodLevel& l0 = m.levels[0];
-  for (size_t h = 1; h < m.levels.size(); ++h) {
-    const LikelihoodLevel& lh = m.levels[h];
+  const LikelihoodLevel& l0 = m.levels()[0];
+  for (size_t h = 1; h < m.levels().size(); ++h) {
+    const LikelihoodLevel& lh = m.levels()[h];
     const int block = 1 << h;
     for (int y = -lh.pad; y < lh.height - lh.pad; y += 7) {
       for (int x = -lh.pad; x < lh.width - lh.pad; x += 5) {
