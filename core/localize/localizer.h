@@ -164,6 +164,19 @@ struct LocalizeOptions {
   // there a weak fit of an earlier map props up a wrong hypothesis (place@1
   // .887 -> .882 with it).
   bool prior_weak_fits = true;
+  // A loose prior's sure answer also faces its best map's best other
+  // optimum beyond this distance (query centroid), within the prior's window:
+  // a pose that fits about as well 0.2-1 m away breaks what a sure answer
+  // promises (0.2 m), and the self-rival above looks only beyond 1 m. Not
+  // fitted: the promise's radius; a match that ICP brings back within it is
+  // the same optimum. Served (lmd-eval served --mode prior --no-changes,
+  // 2026-12-05, back to back): no answer changes; sure and wrong 51 -> 44
+  // (tuning logs 17 -> 15, held out 34 -> 29; four of the seven 0.7-2.9 m
+  // off, three at the truth's 0.2 m edge), sure 0.647 -> 0.642 (23 right
+  // answers unsure), lmdd CPU the same. Not for tight priors (--mode
+  // tracking: 31 right answers unsure for 2 wrong ones at the truth's edge)
+  // nor global answers (5 right unsure for 2 at the edge, +15 % CPU).
+  double prior_near_rival_m = 0.2;
   // Where no map fits within a prior that is not tight (nothing reaches
   // confidence.min_score inside it), the best-bounded prior_maps of all the
   // anchored maps near the prior that were not verified yet are verified

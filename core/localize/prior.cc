@@ -352,17 +352,25 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window (at its heading:
   // another turn would be outside the prior's).
+  // Beyond `radius_m` of it (query centroid): a match that ICP brings back
+  // within it is the same optimum, not a rival.
+  auto other_pose = [&](const LocalizedHit& best, double radius_m) {
+    ScanMatchOptions window = options.match;
+    window.window_m = max_off_m;
+    ScanMatchOptions excluding = Excluding(window, query, best.pose, options);
+    excluding.correlative.exclude_radius_m = radius_m;
+    const ScanMatch second = MatchLocalMaps(query.match, *best.db, {best.pose}, excluding);
+    const Point2 p = TransformPoint(second.pose, query.match.centroid);
+    const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
+                                 p.y - excluding.correlative.exclude_centroid.y) <= radius_m;
+    return back ? 0.0 : Scored(query, *best.db, second, options).score;
+  };
   std::function<double(const LocalizedHit&)> second_pose;
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
-      ScanMatchOptions window = options.match;
-      window.window_m = max_off_m;
-      const ScanMatchOptions excluding = Excluding(window, query, best.pose, options);
-      const ScanMatch second = MatchLocalMaps(query.match, *best.db, {best.pose}, excluding);
-      const Point2 p = TransformPoint(second.pose, query.match.centroid);
-      const bool back = std::hypot(p.x - excluding.correlative.exclude_centroid.x,
-                                   p.y - excluding.correlative.exclude_centroid.y) <= options.self_rival_radius_m;
-      return back ? 0.0 : Scored(query, *best.db, second, options).score;
+      const double far = other_pose(best, options.self_rival_radius_m);
+      const bool near = loose && options.prior_near_rival_m > 0 && options.prior_near_rival_m < options.self_rival_radius_m;
+      return near ? std::max(far, other_pose(best, options.prior_near_rival_m)) : far;
     };
   }
   Conclude(query, judged, std::move(hits), second_pose, with_changes, &out);

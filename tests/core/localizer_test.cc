@@ -538,6 +538,34 @@ TEST(LocalizerTest, WhereNoNearestMapFitsAPriorsOtherMapsNearItAreVerified) {
   EXPECT_TRUE(capped.verdict.prior_failed);
 }
 
+// A stored map that holds every wall twice, 0.6 m apart (two passes merged
+// with their poses off; no scans, so no free space contradicts either copy),
+// fits a query of its room at two poses. A sure answer promises 0.2 m, so a
+// loose prior's answer is not sure; with the self-rival looking only beyond
+// 1 m, it was.
+TEST(LocalizerTest, ALoosePriorsAnswerIsNotSureWhereItsMapFitsTwoPosesUnderAMetreApart) {
+  LocalMap doubled = StoredRoom({0, 0}, true, 61);
+  const size_t points = doubled.points.size();
+  for (size_t i = 0; i < points; ++i) doubled.points.push_back({doubled.points[i].x + 0.6, doubled.points[i].y});
+  doubled.scans.clear();
+  LocalMap query = StoredRoom({0, 0}, true, 62);
+  query.scans.clear();
+  const OneMapSite site({doubled, query});
+  const Prior loose = PriorOff(site.truth, {1.5, -1.0, 12.0}, 3.5, 20.0);
+  LocalizeOptions beyond_a_metre = kOptions;
+  beyond_a_metre.prior_near_rival_m = 0.0;
+  const Localization far = LocalizeNear(site.query, site.collection, beyond_a_metre, loose);
+  const Localization near = LocalizeNear(site.query, site.collection, kOptions, loose);
+  ASSERT_FALSE(far.hits.empty());
+  EXPECT_TRUE(far.verdict.sure);
+  EXPECT_FALSE(near.verdict.sure);
+  // A tracking robot's tight prior faces the self-rival alone (measured: the
+  // nearer one cost right answers there and caught no wrong ones).
+  const Localization tracking =
+      LocalizeNear(site.query, site.collection, kOptions, PriorOff(site.truth, {0.2, -0.1, 1.5}, 0.4, 3.0));
+  EXPECT_TRUE(tracking.verdict.sure);
+}
+
 // The maps nearest a prior are searched for their best pose however weak: a
 // stored map that saw only the west end of a hall explains a small share of
 // a query that saw all of it, too small for the search's min_score, yet it
