@@ -85,7 +85,8 @@ struct PreparedMap {
   // The pyramid's levels, built on the first call (thread-safe) and shared
   // by copies: only a map matched against needs them, and most of a
   // fleet's maps are prepared as queries and stored but never matched
-  // against (the pyramid was half of preparing one).
+  // against (the pyramid was half of preparing one). Built from `points`
+  // and the grid above, which must not change once prepared.
   const std::vector<LikelihoodLevel>& levels() const;
 
   // Free space of the db map (rotation 0); empty (0 x 0) when not built.

@@ -351,9 +351,9 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   keep_each_once(&hits);
   const bool failed = hits.empty() || hits[0].score < options.confidence.min_score;
   // Another pose of the best map within the prior window (at its heading:
-  // another turn would be outside the prior's).
-  // Beyond `radius_m` of it (query centroid): a match that ICP brings back
-  // within it is the same optimum, not a rival.
+  // another turn would be outside the prior's), beyond `radius_m` of it
+  // (query centroid); a match that ICP brings back within it is the same
+  // optimum, not a rival.
   auto other_pose = [&](const LocalizedHit& best, double radius_m) {
     ScanMatchOptions window = options.match;
     window.window_m = max_off_m;
