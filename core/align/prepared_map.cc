@@ -12,7 +12,8 @@ namespace lmd {
 namespace {
 
 double KernelSigma(const PreparedMapOptions& o) { return std::max(1e-3, o.kernel_sigma_m); }
-int KernelReachCells(const PreparedMapOptions& o) { return static_cast<int>(std::ceil(3.0 * KernelSigma(o) / o.cell_m)); }
+double KernelReach(const PreparedMapOptions& o) { return 3.0 * KernelSigma(o); }  // m; the kernel is 0 beyond
+int KernelReachCells(const PreparedMapOptions& o) { return static_cast<int>(std::ceil(KernelReach(o) / o.cell_m)); }
 
 // Level h from level h-1: max over the two half-blocks along x, then along y.
 // With next.pad = prev.pad + half, next's column jx covers prev's columns
@@ -57,7 +58,7 @@ void PlacePyramid(PreparedMap* m) {
 std::vector<LikelihoodLevel> BuildPyramid(const PreparedMap& m) {
   const PreparedMapOptions& o = m.options;
   const double sigma = KernelSigma(o);
-  const double reach = 3.0 * sigma;
+  const double reach = KernelReach(o);
   const int r = KernelReachCells(o);
   LikelihoodLevel base;
   base.pad = 0;

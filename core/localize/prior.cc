@@ -365,12 +365,13 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                                  p.y - excluding.correlative.exclude_centroid.y) <= radius_m;
     return back ? 0.0 : Scored(query, *best.db, second, options).score;
   };
+  const bool closer_rival =
+      loose && options.prior_near_rival_m > 0 && options.prior_near_rival_m < options.self_rival_radius_m;
   std::function<double(const LocalizedHit&)> second_pose;
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) {
       const double far = other_pose(best, options.self_rival_radius_m);
-      const bool near = loose && options.prior_near_rival_m > 0 && options.prior_near_rival_m < options.self_rival_radius_m;
-      return near ? std::max(far, other_pose(best, options.prior_near_rival_m)) : far;
+      return closer_rival ? std::max(far, other_pose(best, options.prior_near_rival_m)) : far;
     };
   }
   Conclude(query, judged, std::move(hits), second_pose, with_changes, &out);
