@@ -177,8 +177,7 @@ size_t PreparedMap::MemoryBytes() const {
   return bytes;
 }
 
-PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options,
-                          std::optional<double> known_heading) {
+PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedMapOptions& options) {
   PreparedMap m;
   m.options = options;
   m.options.cell_m = std::max(0.01, options.cell_m);
@@ -196,9 +195,16 @@ PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOp
     m.max_corner.x = std::max(m.max_corner.x, p.x);
     m.max_corner.y = std::max(m.max_corner.y, p.y);
   }
+  PlacePyramid(&m);
+  return m;
+}
+
+PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options,
+                          std::optional<double> known_heading) {
+  PreparedMap m = PrepareSearchGrid(points, options);
+  if (m.points.empty()) return m;
   m.heading = known_heading ? *known_heading : EstimateDominantOrientation(m.points, options.orientation);
   m.sparse_points = DeduplicatePoints(m.points, std::max(0.01, options.sparse_cell_m));
-  PlacePyramid(&m);
   BuildBuckets(&m);
   BuildNormals(&m);
   return m;

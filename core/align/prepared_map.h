@@ -124,6 +124,13 @@ PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options = 
 PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options = {},
                           std::optional<double> known_heading = std::nullopt);
 
+// A map for the correlative search alone (correlative_search.h): its points,
+// their box and the pyramid's grid; no buckets, normals, heading or free
+// space, so neither ICP nor overlap measures apply. For a grid of several
+// maps' points fused (core/localize/site_grid.h). Points that are not finite
+// are dropped; options are clamped as PreparePoints clamps them.
+PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedMapOptions& options = {});
+
 // Index of the map point nearest to p within max_dist_m (<= neighbour_cell_m),
 // or -1 if none. *dist2 (if not null) receives its squared distance.
 int NearestPoint(const PreparedMap& map, const Point2& p, double max_dist_m, double* dist2 = nullptr);
