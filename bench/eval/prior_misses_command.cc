@@ -1,6 +1,7 @@
 // lmd-eval prior-misses: why loose prior queries miss the place. In process,
 // with lmdd's defaults (core/localize/prior.h; --one-pose: without
-// LocalizeOptions::prior_second_pose): every map of each log is
+// LocalizeOptions::prior_second_pose; --no-site: without
+// LocalizeOptions::prior_site_maps): every map of each log is
 // stored, anchored at its true pose with its trajectory; each map with a
 // place (a stored map outside its 10 m of travel shows it) is asked with
 // its true pose off by 1-3 m and 10-20 deg (lmd-eval served --mode prior's
@@ -107,12 +108,13 @@ void Print(const PriorMissCounts& c) {
 
 int RunPriorMisses(int argc, char** argv) {
   Args args;
-  if (!args.Parse(argc, argv, 0, {"one-pose", "tracking"})) {
+  if (!args.Parse(argc, argv, 0, {"one-pose", "no-site", "tracking"})) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;
   }
   LocalizeOptions options;
   options.prior_second_pose = !args.Has("one-pose");  // the ablation: each map's first pose only
+  if (args.Has("no-site")) options.prior_site_maps = 0;  // the ablation: without the site grid
   std::vector<PriorMissCounts> all;
   const int read = ForEachServedLog(args.GetAll("log"), "prior-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));

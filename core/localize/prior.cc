@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/align/correlative_search.h"
+#include "core/localize/site_grid.h"
 #include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
 
@@ -282,6 +283,11 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     keep_each_once(&kept);
     std::vector<JudgedHit> as_judged = AsJudged(kept);
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
+  }
+  if (loose && !nearest_sure) {
+    for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, stop, &out.stats)) {
+      hits.push_back(std::move(hit));
+    }
   }
   // The anchored maps that can overlap the prior region.
   auto anchored_near = [&] {

@@ -15,6 +15,7 @@
 #include "core/localize/memory_collection.h"
 #include "core/localize/prior.h"
 #include "core/localize/sequence.h"
+#include "core/localize/site_grid.h"
 #include "core/localize/verification.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
@@ -400,6 +401,41 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
     higher += best_two > best_one + 0.01;
   }
   EXPECT_GT(higher, 0u) << "of " << queries;  // 4 of 147 when written
+}
+
+// A loose prior's query is also searched on the site grid (the anchored
+// maps near the prior fused): it lands at its true site pose, and the maps
+// that explain most of it there are the hits, best first, each once.
+TEST(LocalizerTest, ALoosePriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions off = kOptions;
+  off.prior_site_maps = 0;
+  size_t queries = 0, right = 0;
+  for (size_t q = 5; q < DemoMaps().size(); q += 23) {
+    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalQuery query = PrepareLocalQuery(map, kOptions);
+    const Pose2 truth = map.truth.global_frame;
+    const Prior loose = PriorOff(truth, {-2.0, 1.5, 15.0}, 3.5, 20.0);
+    const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
+    LocalizeStats stats;
+    const std::vector<LocalizedHit> hits =
+        localize_internal::SiteGridHits(query, collection, kOptions, loose, excluded, {}, &stats);
+    ASSERT_LE(hits.size(), kOptions.prior_site_maps) << q;
+    ++queries;
+    if (hits.empty()) continue;
+    std::set<uint64_t> maps;
+    for (const LocalizedHit& h : hits) {
+      EXPECT_FALSE(excluded(h.map_id)) << q;
+      EXPECT_TRUE(maps.insert(h.map_id).second) << q;
+    }
+    const LocalizedHit& best = hits[0];
+    const Pose2 site = Compose(*collection.AnchorOf(best.map_id), best.pose);
+    right += ShowsPlace(map, DemoMaps()[best.map_id]) && TranslationError(site, truth) < 0.1 &&
+             AngleErrorDeg(site, truth) < 0.5;
+    EXPECT_TRUE(localize_internal::SiteGridHits(query, collection, off, loose, excluded, {}, &stats).empty());
+  }
+  EXPECT_GE(right * 10, queries * 9) << right << " of " << queries;
 }
 
 // A 40 m hall (a cupboard in its west end: the corner is not symmetric)
