@@ -142,20 +142,24 @@ struct LocalizeOptions {
   // with lmd-eval prior-misses on all nine logs. A sequence's check of where
   // a hypothesis puts each map skips it.
   bool prior_second_pose = true;
-  // A prior that is not tight, where its nearest maps leave the answer
-  // unsure: the query is also searched once on the site map near the prior
-  // (the anchored maps there fused into one grid, site_grid.h), and the
-  // prior_site_maps maps that explain most of it at the site's best pose
-  // are verified there. 0: not searched. No threshold of its own. Found
-  // with lmd-eval prior-misses (nine logs, in process): 96 -> 79 misses
-  // (frcampus 49 -> 36, mit 30 -> 29, aces 2 -> 1, edmonton 1 -> 0; its
+  // A robot's prior (loose or tight; not a sequence's check), where its
+  // nearest maps leave the answer unsure: the query is also searched once on
+  // the site map near the prior (the anchored maps there fused into one
+  // grid, site_grid.h), and the prior_site_maps maps that explain most of it
+  // at the site's best pose are verified there. 0: not searched. No
+  // threshold of its own. Found with lmd-eval prior-misses (nine logs, in
+  // process): loose priors 96 -> 79 misses (frcampus 49 -> 36; its
   // "shifted" class, a map's search preferring a corridor shifted along
-  // itself, 44 -> 33). Served (lmd-eval served --mode prior --no-changes,
-  // 2026-12-05, one lmdd, back to back): place@1 .9893 -> .9902 (held out
-  // .9884 -> .9911, tuned on .9903 -> .9891: orebro lost one, aces gained
-  // one), sure and wrong 44 -> 41, lmdd CPU 9.8 / 68.6 -> 11.9 / 81.9 ms
-  // median / p99. Searched for every loose prior instead: the same place@1,
-  // 45 wrong, 19.2 ms median.
+  // itself, 44 -> 33), tracking priors (--tracking) 109 -> 56 (frcampus
+  // 67 -> 39, mit 28 -> 11). Served (lmd-eval served --no-changes,
+  // 2026-12-05, one lmdd, back to back): --mode prior place@1 .9893 ->
+  // .9902 (held out .9884 -> .9911, tuned on .9903 -> .9891), sure and
+  // wrong 44 -> 41, lmdd CPU 9.8 -> 11.9 ms median; --mode tracking .985 ->
+  // .992 (held out .980 -> .990), sure .658 -> .668, sure and wrong 38 ->
+  // 46 (each new one the right place at the truth's edge: 0.20-0.38 m or
+  // 1.07-1.13 deg off, seven at maps the other maps of their place move),
+  // 4.0 -> 5.1 ms. Searched for every loose prior instead: the same
+  // place@1, 45 wrong, 19.2 ms median.
   size_t prior_site_maps = 3;
   // A prior that is not tight runs the first stage only when the nearest
   // maps' hits (with their next-best poses) do not already make a sure

@@ -277,14 +277,15 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   };
   LocalizeOptions judged = options;
   judged.confidence.min_confidence = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
+  // Whether a robot's nearest maps already make a sure answer.
   bool nearest_sure = false;
-  if (options.prior_stage_when_unsure && loose) {
+  if (options.prior_first_stage) {
     std::vector<LocalizedHit> kept = hits;
     keep_each_once(&kept);
     std::vector<JudgedHit> as_judged = AsJudged(kept);
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
   }
-  if (loose && !nearest_sure) {
+  if (options.prior_first_stage && !nearest_sure) {
     for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, stop, &out.stats)) {
       hits.push_back(std::move(hit));
     }
@@ -294,7 +295,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     return source.AnchoredNear({prior.pose.x, prior.pose.y}, prior.radius_m + reach, kStageMapsPerCell, excluded);
   };
   const std::vector<MapSource::Anchored> near =
-      loose && !nearest_sure ? anchored_near() : std::vector<MapSource::Anchored>{};
+      loose && !(options.prior_stage_when_unsure && nearest_sure) ? anchored_near() : std::vector<MapSource::Anchored>{};
   if (!near.empty()) {
     std::vector<uint64_t> ids;
     for (const MapSource::Anchored& a : near) ids.push_back(a.map_id);

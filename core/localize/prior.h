@@ -43,8 +43,9 @@ Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& an
 // the maps' compasses give (PriorGuess); where nothing fits within a loose
 // prior, the nearest maps again over the prior's whole heading range (a
 // compass misreads the turn where walls do not meet at right angles).
-// Where the nearest maps leave the answer unsure, the query is also
-// searched on the site map near the prior (site_grid.h).
+// Where the nearest maps leave a robot's answer unsure (loose or tight
+// prior), the query is also searched on the site map near the prior
+// (site_grid.h).
 // Hits carry collection_pose. The
 // verdict's rivals are the other maps' disagreeing hits and the best map at
 // another pose within the prior window. verdict.prior_failed when no map

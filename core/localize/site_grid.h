@@ -1,4 +1,4 @@
-// A loose prior's query matched against the site map near the prior: the
+// A robot's prior query matched against the site map near the prior: the
 // points of the anchored maps there, fused into one search grid in the
 // collection's frame, searched once over the prior's window. Where a place
 // is split over several stored maps (a robot saw part of it on each pass),

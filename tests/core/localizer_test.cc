@@ -382,6 +382,7 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   StoreAnchored(EveryThirdMap(), &collection);
   LocalizeOptions two_poses = kOptions;
   two_poses.prior_stage_when_unsure = false;  // the stage's maps in both runs
+  two_poses.prior_site_maps = 0;              // the site grid runs where the nearest maps leave it unsure
   LocalizeOptions one_pose = two_poses;
   one_pose.prior_second_pose = false;
   size_t queries = 0, higher = 0;
@@ -403,24 +404,26 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   EXPECT_GT(higher, 0u) << "of " << queries;  // 4 of 147 when written
 }
 
-// A loose prior's query is also searched on the site grid (the anchored
+// A robot's prior query is also searched on the site grid (the anchored
 // maps near the prior fused): it lands at its true site pose, and the maps
-// that explain most of it there are the hits, best first, each once.
-TEST(LocalizerTest, ALoosePriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
+// that explain most of it there are the hits, best first, each once; from
+// a loose prior and from a tracking robot's tight one alike.
+TEST(LocalizerTest, APriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
   MemoryCollection collection;
   StoreAnchored(EveryThirdMap(), &collection);
   LocalizeOptions off = kOptions;
   off.prior_site_maps = 0;
-  size_t queries = 0, right = 0;
+  size_t queries = 0, right = 0, tights = 0;
   for (size_t q = 5; q < DemoMaps().size(); q += 23) {
     const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
-    const Prior loose = PriorOff(truth, {-2.0, 1.5, 15.0}, 3.5, 20.0);
+    const bool tight = q % 2 == 0;
+    const Prior prior = tight ? PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 3.0) : PriorOff(truth, {-2.0, 1.5, 15.0}, 3.5, 20.0);
     const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
     LocalizeStats stats;
     const std::vector<LocalizedHit> hits =
-        localize_internal::SiteGridHits(query, collection, kOptions, loose, excluded, {}, &stats);
+        localize_internal::SiteGridHits(query, collection, kOptions, prior, excluded, {}, &stats);
     ASSERT_LE(hits.size(), kOptions.prior_site_maps) << q;
     ++queries;
     if (hits.empty()) continue;
@@ -433,9 +436,11 @@ TEST(LocalizerTest, ALoosePriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
     const Pose2 site = Compose(*collection.AnchorOf(best.map_id), best.pose);
     right += ShowsPlace(map, DemoMaps()[best.map_id]) && TranslationError(site, truth) < 0.1 &&
              AngleErrorDeg(site, truth) < 0.5;
-    EXPECT_TRUE(localize_internal::SiteGridHits(query, collection, off, loose, excluded, {}, &stats).empty());
+    tights += tight;
+    EXPECT_TRUE(localize_internal::SiteGridHits(query, collection, off, prior, excluded, {}, &stats).empty());
   }
   EXPECT_GE(right * 10, queries * 9) << right << " of " << queries;
+  EXPECT_GT(tights, 0u);
 }
 
 // A 40 m hall (a cupboard in its west end: the corner is not symmetric)
