@@ -21,16 +21,20 @@ constexpr size_t kSiteMapsPerCell = 32;
 constexpr double kPickWindowM = 0.2;
 constexpr double kPickWindowDeg = 1.0;
 
+// An anchored map near the prior, prepared.
+struct NearMap {
+  MapSource::Anchored anchored;
+  std::shared_ptr<const PreparedMap> db;
+};
+
 // The turns of the query into the collection's frame that the maps'
-// compasses give within the prior's heading range (one per degree).
-std::vector<double> CompassTurns(const LocalQuery& query, const MapSource& source,
-                                 const std::vector<MapSource::Anchored>& near, const Prior& prior) {
+// compasses give within the prior's heading range (those within a degree
+// of each other once).
+std::vector<double> CompassTurns(const LocalQuery& query, const std::vector<NearMap>& near, const Prior& prior) {
   const double quarter = M_PI / 2;
   std::vector<double> turns;
-  for (const MapSource::Anchored& a : near) {
-    std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
-    if (!db) continue;
-    const double compass = a.pose.theta + db->heading - query.map->heading;
+  for (const NearMap& m : near) {
+    const double compass = m.anchored.pose.theta + m.db->heading - query.map->heading;
     const double turn = compass + quarter * std::round(std::remainder(prior.pose.theta - compass, 2 * M_PI) / quarter);
     if (std::abs(std::remainder(turn - prior.pose.theta, 2 * M_PI)) > 2 * prior.heading_sigma_rad) continue;
     const bool seen = std::any_of(turns.begin(), turns.end(), [&](double u) {
@@ -41,13 +45,10 @@ std::vector<double> CompassTurns(const LocalQuery& query, const MapSource& sourc
   return turns;
 }
 
-}  // namespace
-
-std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource& source,
-                                       const LocalizeOptions& options, const Prior& prior,
-                                       const std::function<bool(uint64_t)>& excluded,
-                                       const std::function<bool()>& stop, LocalizeStats* stats) {
-  const auto t = std::chrono::steady_clock::now();
+// SiteGridHits, less its timing.
+std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+                                          const Prior& prior, const std::function<bool(uint64_t)>& excluded,
+                                          const std::function<bool()>& stop, LocalizeStats* stats) {
   std::vector<LocalizedHit> hits;
   const std::vector<Point2>& points = query.match.search_points;
   if (options.prior_site_maps == 0 || points.empty() || (stop && stop())) return hits;
@@ -57,16 +58,17 @@ std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource&
   for (const Point2& p : points) reach = std::max(reach, std::hypot(p.x, p.y));
   const ScanMatchOptions window = PriorWindow(prior, options);
   const double half = window.window_m + reach + options.match.map.cell_m;
-  const std::vector<MapSource::Anchored> near =
-      source.AnchoredNear({prior.pose.x, prior.pose.y}, window.window_m + reach, kSiteMapsPerCell, excluded);
+  std::vector<NearMap> near;
+  for (const MapSource::Anchored& a :
+       source.AnchoredNear({prior.pose.x, prior.pose.y}, window.window_m + reach, kSiteMapsPerCell, excluded)) {
+    if (std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id)) near.push_back({a, std::move(db)});
+  }
   // Their points there, in the collection's frame (each map's sparse points:
   // one per 0.3 m, within the likelihood kernel's reach of each other).
   std::vector<Point2> site_points;
-  for (const MapSource::Anchored& a : near) {
-    std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
-    if (!db) continue;
-    for (const Point2& p : db->sparse_points) {
-      const Point2 s = TransformPoint(a.pose, p);
+  for (const NearMap& m : near) {
+    for (const Point2& p : m.db->sparse_points) {
+      const Point2 s = TransformPoint(m.anchored.pose, p);
       if (std::abs(s.x - prior.pose.x) <= half && std::abs(s.y - prior.pose.y) <= half) site_points.push_back(s);
     }
   }
@@ -74,7 +76,7 @@ std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource&
   if (site.empty()) return hits;
   // The query's centroid within the window of where each turn puts it (the
   // search turns the query about its centroid).
-  std::vector<double> turns = CompassTurns(query, source, near, prior);
+  std::vector<double> turns = CompassTurns(query, near, prior);
   double half_window_deg = options.match.window_deg;
   if (turns.empty()) {
     turns.push_back(prior.pose.theta);
@@ -100,16 +102,16 @@ std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource&
     std::shared_ptr<const PreparedMap> db;
   };
   std::vector<Picked> picked;
-  for (const MapSource::Anchored& a : near) {
-    std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id);
-    if (!db) continue;
-    const Pose2 in_map = Compose(Inverse(a.pose), found.pose);
+  for (const NearMap& m : near) {
+    const PreparedMap& db = *m.db;
+    const Pose2 in_map = Compose(Inverse(m.anchored.pose), found.pose);
     const Point2 c = TransformPoint(in_map, query.match.centroid);
-    if (c.x < db->min_corner.x - reach || c.x > db->max_corner.x + reach || c.y < db->min_corner.y - reach ||
-        c.y > db->max_corner.y + reach) {
+    if (c.x < db.min_corner.x - reach || c.x > db.max_corner.x + reach || c.y < db.min_corner.y - reach ||
+        c.y > db.max_corner.y + reach) {
       continue;  // the query cannot reach the map's points from there
     }
-    picked.push_back({MeasureOverlap(points, *db, in_map, options.match.inlier_radius_m).fraction, a.map_id, in_map, db});
+    picked.push_back({MeasureOverlap(points, db, in_map, options.match.inlier_radius_m).fraction, m.anchored.map_id,
+                      in_map, m.db});
   }
   const size_t keep = std::min(picked.size(), options.prior_site_maps);
   std::partial_sort(picked.begin(), picked.begin() + keep, picked.end(), [](const Picked& a, const Picked& b) {
@@ -127,6 +129,17 @@ std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource&
     hit.db = p.db;
     hits.push_back(std::move(hit));
   }
+  return hits;
+}
+
+}  // namespace
+
+std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource& source,
+                                       const LocalizeOptions& options, const Prior& prior,
+                                       const std::function<bool(uint64_t)>& excluded,
+                                       const std::function<bool()>& stop, LocalizeStats* stats) {
+  const auto t = std::chrono::steady_clock::now();
+  std::vector<LocalizedHit> hits = MatchOnSiteGrid(query, source, options, prior, excluded, stop, stats);
   stats->verify_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   return hits;
 }
