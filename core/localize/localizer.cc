@@ -19,6 +19,12 @@ double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::
 
 }  // namespace
 
+double QueryReach(const LocalQuery& query) {
+  double reach = 0.0;
+  for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
+  return reach;
+}
+
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options) {
   LocalizedHit hit;
   hit.pose = m.pose;

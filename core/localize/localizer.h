@@ -157,7 +157,7 @@ struct LocalizeOptions {
   // wrong 44 -> 41, lmdd CPU 9.8 -> 11.9 ms median; --mode tracking .985 ->
   // .992 (held out .980 -> .990), sure .658 -> .668, sure and wrong 38 ->
   // 46 (each new one the right place at the truth's edge: 0.20-0.38 m or
-  // 1.07-1.13 deg off, seven at maps the other maps of their place move),
+  // 1.07-1.13 deg off, seven fitting the query better than the log's pose),
   // 4.0 -> 5.1 ms. Searched for every loose prior instead: the same
   // place@1, 45 wrong, 19.2 ms median.
   size_t prior_site_maps = 3;

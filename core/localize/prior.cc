@@ -196,12 +196,15 @@ ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options)
   return match;
 }
 
+double CompassTurn(double compass, double theta) {
+  const double quarter = M_PI / 2;
+  return compass + quarter * std::round(std::remainder(theta - compass, 2 * M_PI) / quarter);
+}
+
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
                  double window_deg, double* search_window_deg) {
   Pose2 guess = Compose(Inverse(anchor), prior.pose);
-  const double quarter = M_PI / 2;
-  const double compass = db.heading - query.map->heading;
-  const double turn = compass + quarter * std::round(std::remainder(guess.theta - compass, 2 * M_PI) / quarter);
+  const double turn = CompassTurn(db.heading - query.map->heading, guess.theta);
   const bool snapped =
       std::abs(std::remainder(turn - guess.theta, 2 * M_PI)) <= 2 * prior.heading_sigma_rad + window_deg * M_PI / 180;
   if (snapped) guess.theta = turn;
@@ -227,8 +230,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                           const std::function<bool()>& stop, bool with_changes) {
   Localization out;
   // Where the query's points can lie in the collection's frame.
-  double reach = 0.0;
-  for (const Point2& p : query.match.search_points) reach = std::max(reach, std::hypot(p.x, p.y));
+  const double reach = QueryReach(query);
   // Where its robot drove, at the prior.
   std::vector<Point2> path;
   for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(prior.pose, {p.x, p.y}));

@@ -35,6 +35,11 @@ ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options)
 // that turn lies within the prior's heading uncertainty widened by
 // `window_deg`, and the window stays `window_deg`; else the heading is the
 // prior's and the window covers the prior's whole heading range.
+// The turn nearest `theta` among those a quarter turn apart from `compass`
+// (rad): the entropy compass reads a map's heading modulo 90 deg, so two
+// maps' compasses give the turn between them up to quarter turns.
+double CompassTurn(double compass, double theta);
+
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
                  double window_deg, double* search_window_deg);
 

@@ -31,11 +31,9 @@ struct NearMap {
 // compasses give within the prior's heading range (those within a degree
 // of each other once).
 std::vector<double> CompassTurns(const LocalQuery& query, const std::vector<NearMap>& near, const Prior& prior) {
-  const double quarter = M_PI / 2;
   std::vector<double> turns;
   for (const NearMap& m : near) {
-    const double compass = m.anchored.pose.theta + m.db->heading - query.map->heading;
-    const double turn = compass + quarter * std::round(std::remainder(prior.pose.theta - compass, 2 * M_PI) / quarter);
+    const double turn = CompassTurn(m.anchored.pose.theta + m.db->heading - query.map->heading, prior.pose.theta);
     if (std::abs(std::remainder(turn - prior.pose.theta, 2 * M_PI)) > 2 * prior.heading_sigma_rad) continue;
     const bool seen = std::any_of(turns.begin(), turns.end(), [&](double u) {
       return std::abs(std::remainder(u - turn, 2 * M_PI)) < M_PI / 180;
@@ -54,8 +52,7 @@ std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSour
   if (options.prior_site_maps == 0 || points.empty() || (stop && stop())) return hits;
   // The anchored maps the query can overlap: its points lie within `reach`
   // of its origin, which the prior puts within the window of its own.
-  double reach = 0.0;
-  for (const Point2& p : points) reach = std::max(reach, std::hypot(p.x, p.y));
+  const double reach = QueryReach(query);
   const ScanMatchOptions window = PriorWindow(prior, options);
   const double half = window.window_m + reach + options.match.map.cell_m;
   std::vector<NearMap> near;

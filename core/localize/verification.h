@@ -20,6 +20,10 @@ struct Candidate {
   size_t first_rank = 0;
 };
 
+// How far the query's points (those the search matches) lie from its own
+// origin, m: where a prior puts the origin, the points lie within this.
+double QueryReach(const LocalQuery& query);
+
 // The hit of a scan match: its pose, shares and verification score.
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options);
 // The hit at `pose`, measured as verification measures (no search).
