@@ -120,7 +120,15 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
 
-  if (with_changes && out->verdict.sure) {
+  // A change mask needs the place, not the pose to 0.2 m that a sure answer
+  // promises: masks also where the place is clear, the best hit fitting and
+  // no disagreeing hit within the margin (the verdict's own min_score and
+  // min_margin), though the calibrated confidence or the maps' pose spread
+  // keep the answer unsure.
+  const Verdict& v = out->verdict;
+  const bool place_clear = options.changes_where_place_clear && v.best_score >= options.confidence.min_score &&
+                           v.best_score - v.rival_score >= options.confidence.min_margin;
+  if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
     std::vector<AlignedMap> place;
     for (const LocalizedHit& h : hits) {

@@ -958,7 +958,9 @@ TEST(LocalizerTest, TwoLookAlikePlacesMakeTheAnswerUnsure) {
 // space the stored map's beams passed through. LocalizeOptions.changes keeps
 // masks of evidence 5 or more (0.79 of the masks that found the change on
 // real logs), so a sure answer may come without a mask; a mask it gives is
-// on the change, and the unchanged query gives none.
+// on the change, and the unchanged query gives none. An answer gives masks
+// only where its place is clear (sure, or the best hit fitting with no
+// disagreeing hit within the margin).
 TEST(LocalizerTest, ANewObjectGivesAChangeMaskOnItAndTheUnchangedQueryNone) {
   MemoryCollection collection;
   Store(EveryThirdMap(), &collection);
@@ -979,11 +981,13 @@ TEST(LocalizerTest, ANewObjectGivesAChangeMaskOnItAndTheUnchangedQueryNone) {
     unchanged_sure += unchanged.verdict.sure ? 1 : 0;
 
     const Localization l = LocalizeIn(collection, MovedCopy(changed, move), kOptions, {}, {}, true);
-    if (!l.verdict.sure) {
-      EXPECT_TRUE(l.changes.empty()) << q;  // masks only for a sure answer
+    const bool place_clear = l.verdict.best_score >= kOptions.confidence.min_score &&
+                             l.verdict.best_score - l.verdict.rival_score >= kOptions.confidence.min_margin;
+    if (!l.verdict.sure && !place_clear) {
+      EXPECT_TRUE(l.changes.empty()) << q;  // masks only where the place is clear
       continue;
     }
-    ++sure;
+    sure += l.verdict.sure ? 1 : 0;
     if (!l.changes.empty()) {
       EXPECT_TRUE(MaskHitsChange(l.changes[0].points, changed_points, 0.5)) << "map " << q << ": top mask off the change";
       on_change += MaskHitsChange(l.changes[0].points, changed_points, 0.5) ? 1 : 0;
@@ -1003,6 +1007,36 @@ TEST(LocalizerTest, ANewObjectGivesAChangeMaskOnItAndTheUnchangedQueryNone) {
   EXPECT_GE(3 * unchanged_sure, 2 * tasks);  // no masks although the answers were sure (masks computed)
   EXPECT_TRUE(checked_without);
   EXPECT_GE(3 * on_change, 2 * sure) << on_change << " masks on the change of " << sure << " sure answers";
+}
+
+// Where no answer can be sure (a confidence above 1 asked), an answer whose
+// place is clear still gives its change masks, on the change; with
+// changes_where_place_clear off it gives none.
+TEST(LocalizerTest, AnUnsureAnswerWhosePlaceIsClearStillGivesItsChangeMasks) {
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);
+  LocalizeOptions never_sure = kOptions;
+  never_sure.confidence.min_confidence = 1.1;
+  LocalizeOptions sure_only = never_sure;
+  sure_only.changes_where_place_clear = false;
+  std::mt19937_64 rng(3);
+  size_t tasks = 0, with_masks = 0;
+  for (size_t q = 0; q < DemoMaps().size() && tasks < 6; q += 21) {
+    LocalMap changed = DemoMaps()[q];
+    const Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
+    if (!change.ok()) continue;
+    ++tasks;
+    const Localization l = LocalizeIn(collection, changed, never_sure, {}, {}, true);
+    EXPECT_FALSE(l.verdict.sure) << q;
+    if (l.changes.empty()) continue;
+    ++with_masks;
+    EXPECT_GE(l.verdict.best_score, never_sure.confidence.min_score) << q;
+    EXPECT_GE(l.verdict.best_score - l.verdict.rival_score, never_sure.confidence.min_margin) << q;
+    EXPECT_TRUE(MaskHitsChange(l.changes[0].points, change->changed_points, 0.5)) << "map " << q;
+    EXPECT_TRUE(LocalizeIn(collection, changed, sure_only, {}, {}, true).changes.empty()) << q;
+  }
+  ASSERT_EQ(tasks, 6u);
+  EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " unsure answers gave masks";
 }
 
 // lmdd prepares a map once and uses it both to store and to query.
