@@ -2,7 +2,8 @@
 // runs it (core/localize: prepare the query, first-stage search, scan
 // matching of the chosen maps, the verdict, change masks) and of the whole
 // call, and of prior queries, on the demo world's local maps or, with
-// LMD_BENCH_LOG=FILE, on a CARMEN log's. Google Benchmark; run
+// LMD_BENCH_LOG=FILE, on a CARMEN log's; and of indexing a stored map's
+// place features. Google Benchmark; run
 // `build/bench/lmd-microbench` (--benchmark_filter=Search picks a stage).
 // Each query is a stored map, localised against the others with the maps
 // within 10 m of its travel left out (lmd-eval served's protocol); one
@@ -22,6 +23,7 @@
 #include "core/localize/memory_collection.h"
 #include "core/localize/prior.h"
 #include "core/localmap/local_map_builder.h"
+#include "core/place/place_index.h"
 #include "core/sim/pose_noise.h"
 #include "core/sim/simulate.h"
 
@@ -91,6 +93,23 @@ void BM_PrepareQuery(benchmark::State& state) {
   state.counters["per_query"] = PerQuery(w.queries.size());
 }
 BENCHMARK(BM_PrepareQuery)->Unit(benchmark::kMillisecond);
+
+// Indexing every stored map's place features in a fresh index, as lmdd
+// does at each insert (the index's own allocation not timed).
+void BM_IndexPlaceFeatures(benchmark::State& state) {
+  const World& w = TheWorld();
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto index = std::make_unique<PlaceIndex>();
+    state.ResumeTiming();
+    for (size_t i = 0; i < w.places.size(); ++i) benchmark::DoNotOptimize(index->Add(i, w.places[i].features));
+    state.PauseTiming();
+    index.reset();
+    state.ResumeTiming();
+  }
+  state.counters["per_map"] = PerQuery(w.places.size());
+}
+BENCHMARK(BM_IndexPlaceFeatures)->Unit(benchmark::kMillisecond);
 
 void BM_Search(benchmark::State& state) {
   const World& w = TheWorld();

@@ -138,11 +138,24 @@ Status PlaceIndex::Add(uint64_t id, PlaceFeatures features) {
     chunk_slot_[chunk] = slot;
     chunks.push_back(chunk);
   }
+  std::vector<size_t> buckets;  // of each feature's handle, kTables in a row
+  buckets.reserve(features.features.size() * kTables);
   for (size_t i = 0; i < features.features.size(); ++i) {
     const PlaceFeature& f = features.features[i];
     const uint32_t handle = HandleOf(slot, i);
     codes_[handle] = f.code, xs_[handle] = f.x, ys_[handle] = f.y;
-    for (int t = 0; t < kTables; ++t) buckets_[(static_cast<size_t>(t) << kKeyBits) | Key(f.code, t)].push_back(handle);
+    for (int t = 0; t < kTables; ++t) buckets.push_back((static_cast<size_t>(t) << kKeyBits) | Key(f.code, t));
+  }
+  // The buckets lie anywhere in kTables x 2^kKeyBits lists: each list's
+  // header, then its end, fetched ahead of the write (a fifth of a fleet's
+  // insert waited on those two cache misses, lmd-bench load --mode fleet).
+  for (size_t k = 0; k < buckets.size(); ++k) {
+    if (k + 2 * kPrefetch < buckets.size()) __builtin_prefetch(&buckets_[buckets[k + 2 * kPrefetch]]);
+    if (k + kPrefetch < buckets.size()) {
+      const std::vector<uint32_t>& ahead = buckets_[buckets[k + kPrefetch]];
+      __builtin_prefetch(ahead.data() + ahead.size(), 1);
+    }
+    buckets_[buckets[k]].push_back(HandleOf(slot, k / kTables));
   }
   feature_count_ += features.features.size();
   uint64_t hash = kFnv1aOffset;  // over the codes and positions, a word at a time
