@@ -32,7 +32,8 @@ const std::array<std::array<uint8_t, PlaceIndex::kKeyBits>, PlaceIndex::kTables>
   return bits;
 }
 
-// Stored codes fetched this many candidates ahead of their comparison.
+// Memory fetched this many items ahead of its use: stored codes ahead of
+// their comparison (Search), bucket lists ahead of their write (Add).
 constexpr size_t kPrefetch = 8;
 
 // Open-addressing accumulator of votes per (slot, turn, cell x, cell y).
