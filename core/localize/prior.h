@@ -28,6 +28,11 @@ Status ValidatePrior(const Prior& prior);
 // prior_weak_fits.
 ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options);
 
+// The turn nearest `theta` among those a quarter turn apart from `compass`
+// (rad): the entropy compass reads a map's heading modulo 90 deg, so two
+// maps' compasses give the turn between them up to quarter turns.
+double CompassTurn(double compass, double theta);
+
 // The pose of `query`'s own frame in stored map `db`, anchored at `anchor`,
 // that `prior` implies, and the heading window (deg, either side) a search
 // from it needs. Its heading is snapped to the turn the two maps' compasses
@@ -35,11 +40,6 @@ ScanMatchOptions PriorWindow(const Prior& prior, const LocalizeOptions& options)
 // that turn lies within the prior's heading uncertainty widened by
 // `window_deg`, and the window stays `window_deg`; else the heading is the
 // prior's and the window covers the prior's whole heading range.
-// The turn nearest `theta` among those a quarter turn apart from `compass`
-// (rad): the entropy compass reads a map's heading modulo 90 deg, so two
-// maps' compasses give the turn between them up to quarter turns.
-double CompassTurn(double compass, double theta);
-
 Pose2 PriorGuess(const LocalQuery& query, const PreparedMap& db, const Pose2& anchor, const Prior& prior,
                  double window_deg, double* search_window_deg);
 

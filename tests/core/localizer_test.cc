@@ -106,6 +106,9 @@ const std::vector<Pose2>& KnownMoves() {
   return poses;
 }
 
+// Demo map q in an own frame moved by one of the known moves (chosen by q).
+LocalMap MovedDemoMap(size_t q) { return MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]); }
+
 Localization LocalizeIn(const MemoryCollection& collection, const LocalMap& query_map,
                         const LocalizeOptions& options = kOptions, const std::function<bool(uint64_t)>& excluded = {},
                         const std::function<bool()>& stop = {}, bool with_changes = false) {
@@ -220,7 +223,7 @@ TEST(LocalizerTest, TheSitePoseComesFromAnAgreeingAnchoredHitWhenTheBestHasNone)
   Store(EveryThirdMap(), &plain);
   size_t checked = 0;
   for (size_t q = 4; q < DemoMaps().size() && checked < 3; q += 17) {
-    const LocalMap query = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap query = MovedDemoMap(q);
     const Localization first = LocalizeIn(plain, query);
     EXPECT_FALSE(first.verdict.collection_pose) << q;
     if (!first.verdict.sure || first.verdict.agreeing == 0) continue;
@@ -256,7 +259,7 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   StoreAnchored(EveryThirdMap(), &collection);
   size_t compared = 0;
   for (size_t q = 13; q < DemoMaps().size(); q += 12) {
-    const LocalMap newest_map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap newest_map = MovedDemoMap(q);
     const LocalQuery newest = PrepareLocalQuery(newest_map, kOptions);
     std::vector<SequenceStep> earlier;
     for (size_t back : {size_t{4}, size_t{8}}) {
@@ -296,7 +299,7 @@ TEST(LocalizerTest, ASequenceIsCheckedWhereAPosePutsEachOfItsMaps) {
   one_newest.sequence_newest_maps = 1;
   size_t checked = 0, truth_fits_better = 0, fewer_matched = 0;
   for (size_t q = 13; q < DemoMaps().size(); q += 12) {
-    const LocalMap newest_map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap newest_map = MovedDemoMap(q);
     const LocalQuery newest = PrepareLocalQuery(newest_map, kOptions);
     const Pose2 truth = newest_map.truth.global_frame;
     std::vector<SequenceStep> earlier;
@@ -350,7 +353,7 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
   always_stage.prior_stage_when_unsure = false;
   size_t right_tight = 0, right_loose = 0, queries = 0, more_matched = 0;
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
-    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap map = MovedDemoMap(q);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
     const Prior tight = PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 3.0);
@@ -387,7 +390,7 @@ TEST(LocalizerTest, ALoosePriorKeepsEachMapsBetterOfItsTwoBestPoses) {
   one_pose.prior_second_pose = false;
   size_t queries = 0, higher = 0;
   for (size_t q = 1; q < DemoMaps().size(); q += 2) {
-    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap map = MovedDemoMap(q);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
     const Prior loose = PriorOff(truth, {-1.0, 2.0, -15.0}, 3.5, 20.0);
@@ -415,7 +418,7 @@ TEST(LocalizerTest, APriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
   off.prior_site_maps = 0;
   size_t queries = 0, right = 0, tights = 0;
   for (size_t q = 5; q < DemoMaps().size(); q += 23) {
-    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap map = MovedDemoMap(q);
     const LocalQuery query = PrepareLocalQuery(map, kOptions);
     const Pose2 truth = map.truth.global_frame;
     const bool tight = q % 2 == 0;
@@ -485,7 +488,7 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
   StoreAnchored(EveryThirdMap(), &collection);
   size_t queries = 0, skipped = 0, skipped_right = 0;
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
-    const LocalMap map = MovedCopy(DemoMaps()[q], KnownMoves()[q % KnownMoves().size()]);
+    const LocalMap map = MovedDemoMap(q);
     const Pose2 truth = map.truth.global_frame;
     const Localization l = LocalizeNear(PrepareLocalQuery(map, kOptions), collection, kOptions,
                                         PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0));
