@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/align/correlative_search.h"
 #include "core/align/icp.h"
@@ -193,14 +194,14 @@ double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& gues
   return CorrelativeBound(query.match.search_points, db, region, block_m);
 }
 
-void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
                std::vector<PlaceHypothesis>* hypotheses) {
   std::unordered_map<uint64_t, std::shared_ptr<const PreparedMap>> maps;  // each read once
   std::vector<std::pair<double, PlaceHypothesis>> ranked;
   for (const PlaceHypothesis& h : *hypotheses) {
     auto it = maps.find(h.map_id);
     if (it == maps.end()) {
-      if (maps.size() >= options.fit_rank_maps) break;
+      if (maps.size() >= max_maps) break;
       it = maps.emplace(h.map_id, source.Prepared(h.map_id)).first;
     }
     const double fit =
@@ -314,18 +315,65 @@ std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSour
   return hits;
 }
 
+namespace {
+
+// The second round (LocalizeOptions::second_round_hypotheses): the maps
+// among `hypotheses` not in `verified`, all put in order of fit from
+// coarser blocks, then verified as the first round's are; `verified` gains
+// them.
+std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSource& source,
+                                            const std::vector<PlaceHypothesis>& hypotheses,
+                                            const LocalizeOptions& options, const std::function<bool()>& stop,
+                                            LocalizeStats* stats, std::vector<Candidate>* verified) {
+  const auto t = Clock::now();
+  std::unordered_set<uint64_t> done;
+  for (const Candidate& c : *verified) done.insert(c.map_id);
+  std::vector<PlaceHypothesis> second;
+  for (const PlaceHypothesis& h : hypotheses) {
+    if (done.count(h.map_id) == 0) second.push_back(h);
+  }
+  LocalizeOptions coarse = options;
+  coarse.fit_rank_block_m = options.second_round_block_m;
+  RankByFit(query, source, coarse, second.size(), &second);
+  stats->search_ms += MsSince(t);
+  std::vector<Candidate> chosen;
+  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, second, options, options.match, stop, stats, &chosen);
+  for (Candidate& c : chosen) verified->push_back(std::move(c));
+  return hits;
+}
+
+}  // namespace
+
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
                                           const std::function<bool()>& stop, LocalizeStats* stats,
                                           SearchTrace* trace) {
   const auto t = Clock::now();
-  std::vector<PlaceHypothesis> hypotheses = source.Search(query.features, options.search, excluded, &stats->search);
-  stats->hypotheses = hypotheses.size();
-  if (options.fit_rank_maps > 0) RankByFit(query, source, options, &hypotheses);
+  // One search serves both rounds: its hypotheses come best first, so the
+  // first max_hypotheses are those a search for only them returns.
+  PlaceSearchOptions search = options.search;
+  search.max_hypotheses = std::max(search.max_hypotheses, options.second_round_hypotheses);
+  std::vector<PlaceHypothesis> all = source.Search(query.features, search, excluded, &stats->search);
+  const auto first_end = all.begin() + static_cast<std::ptrdiff_t>(std::min(all.size(), options.search.max_hypotheses));
+  std::vector<PlaceHypothesis> first(all.begin(), first_end);
+  stats->hypotheses = first.size();
+  if (options.fit_rank_maps > 0) RankByFit(query, source, options, options.fit_rank_maps, &first);
   stats->search_ms += MsSince(t);
-  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, hypotheses, options, options.match, stop, stats,
-                                                   trace ? &trace->verified : nullptr);
-  if (trace) trace->hypotheses = std::move(hypotheses);
+  std::vector<Candidate> verified;
+  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, first, options, options.match, stop, stats, &verified);
+  const bool fits = !hits.empty() && hits[0].score >= options.confidence.min_score;
+  const bool second_round = options.second_round_hypotheses > 0 && !fits && !(stop && stop());
+  if (second_round) {
+    stats->hypotheses = all.size();
+    for (LocalizedHit& hit : VerifySecondRound(query, source, all, options, stop, stats, &verified)) {
+      hits.push_back(std::move(hit));
+    }
+    SortHits(&hits);
+  }
+  if (trace) {
+    trace->hypotheses = second_round ? std::move(all) : std::move(first);
+    trace->verified = std::move(verified);
+  }
   return hits;
 }
 

@@ -80,6 +80,10 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   // pose and they stayed lost).
   LocalizeOptions site = options;
   site.search.anchored_only = source.HasAnchors();
+  // Each map's hypotheses are checked through the others: a second round
+  // where one map fits nowhere found no more places (lmd-eval served --mode
+  // sequence, 2026-12-05: place@1 .922 -> .921) for +35 % CPU.
+  site.second_round_hypotheses = 0;
   std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, site, excluded, stop, &out.stats);
   SetCollectionPoses(source, &newest_hits);
   const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),

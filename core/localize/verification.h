@@ -41,10 +41,9 @@ std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const 
 // of at most block_m.
 double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& guess, double window_m, double block_m);
 
-// The hypotheses of the first options.fit_rank_maps maps, in order of the
-// query's fit near each (LocalizeOptions::fit_rank_maps), then the others
-// as they were.
-void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+// The hypotheses of the first max_maps maps, in order of the query's fit
+// near each (LocalizeOptions::fit_rank_maps), then the others as they were.
+void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
                std::vector<PlaceHypothesis>* hypotheses);
 
 // A map passed over for chosen route neighbours, with its guesses.
@@ -92,12 +91,13 @@ std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSour
 
 // What SearchAndVerify chose (lmd-eval global-misses reads it).
 struct SearchTrace {
-  std::vector<PlaceHypothesis> hypotheses;  // the first stage's
-  std::vector<Candidate> verified;          // chosen, then retried (PassedOverFailedFits)
+  std::vector<PlaceHypothesis> hypotheses;  // the first stage's (both rounds')
+  std::vector<Candidate> verified;          // chosen, then retried (PassedOverFailedFits), then the second round's
 };
 
 // The first stage and the verification of the maps it names (route
-// neighbours passed over, those of failed fits retried), best hits first:
+// neighbours passed over, those of failed fits retried; where none fits, a
+// second round, LocalizeOptions::second_round_hypotheses), best hits first:
 // Localize without its verdict. `trace` (optional) receives its choices.
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,

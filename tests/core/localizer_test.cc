@@ -868,15 +868,79 @@ TEST(LocalizerTest, HypothesesAreRankedByTheQuerysFitNearEach) {
   const std::vector<PlaceHypothesis> by_votes = {at_own_frame(30, 9), at_own_frame(60, 8), at_own_frame(200, 7),
                                                  at_own_frame(120, 2)};
   std::vector<PlaceHypothesis> ranked = by_votes;
-  localize_internal::RankByFit(query, maps, kOptions, &ranked);
+  localize_internal::RankByFit(query, maps, kOptions, kOptions.fit_rank_maps, &ranked);
   ASSERT_EQ(ranked.size(), by_votes.size());
   EXPECT_EQ(ranked[0].map_id, 120u);
   LocalizeOptions three = kOptions;
   three.fit_rank_maps = 3;
   ranked = by_votes;
-  localize_internal::RankByFit(query, maps, three, &ranked);
+  localize_internal::RankByFit(query, maps, three, three.fit_rank_maps, &ranked);
   ASSERT_EQ(ranked.size(), by_votes.size());
   EXPECT_EQ(ranked.back().map_id, 120u);
+}
+
+// A first stage that names every other stored map before the query's place
+// (at each map's own frame, no fit there), and the place's own hypotheses
+// last: the votes of a place whose features are few or common.
+class PlaceVotedLast : public MapSource {
+ public:
+  PlaceVotedLast(const MemoryCollection* maps, std::vector<uint64_t> others, uint64_t place)
+      : maps_(maps), others_(std::move(others)), place_(place) {}
+  std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
+                                      const std::function<bool(uint64_t)>& excluded,
+                                      PlaceSearchStats* stats) const override {
+    std::vector<PlaceHypothesis> out;
+    for (uint64_t id : others_) {
+      PlaceHypothesis h;
+      h.map_id = id;
+      h.votes = 100.0;
+      out.push_back(h);
+    }
+    PlaceSearchOptions only_place = options;
+    const std::vector<uint64_t> place = {place_};
+    only_place.only = &place;
+    for (const PlaceHypothesis& h : maps_->Search(query, only_place, excluded, stats)) out.push_back(h);
+    if (out.size() > options.max_hypotheses) out.resize(options.max_hypotheses);
+    return out;
+  }
+  std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override { return maps_->Prepared(map_id); }
+  bool RouteOf(uint64_t, Route*) const override { return false; }
+
+ private:
+  const MemoryCollection* maps_;
+  std::vector<uint64_t> others_;
+  uint64_t place_;
+};
+
+// Where no verified map fits, the second round reads the first stage on
+// past max_hypotheses and verifies the maps that fit best there; where one
+// fits, it does not run.
+TEST(LocalizerTest, WhereNoVerifiedMapFitsASecondRoundFindsThePlaceFartherDownTheVotes) {
+  MemoryCollection maps;
+  Store({30, 60, 120, 200, 250}, &maps);
+  const PlaceVotedLast buried(&maps, {30, 60, 200, 250}, 120);
+  const LocalQuery query = PrepareLocalQuery(MovedCopy(DemoMaps()[120], KnownMoves()[1]), kOptions);
+  LocalizeOptions first_four = kOptions;
+  first_four.search.max_hypotheses = 4;  // the other maps only
+  first_four.second_round_hypotheses = 0;
+  const Localization alone = Localize(query, buried, first_four);
+  ASSERT_FALSE(alone.hits.empty());
+  ASSERT_LT(alone.hits[0].score, kOptions.confidence.min_score);  // nothing fits among the four
+  EXPECT_EQ(alone.stats.maps_matched, 4u);
+
+  LocalizeOptions second = first_four;
+  second.second_round_hypotheses = 16;
+  const Localization found = Localize(query, buried, second);
+  ASSERT_FALSE(found.hits.empty());
+  EXPECT_EQ(found.hits[0].map_id, 120u);
+  EXPECT_GE(found.hits[0].score, kOptions.confidence.min_score);
+  EXPECT_EQ(found.stats.maps_matched, 5u);  // the four are not verified again
+
+  const PlaceVotedLast place_first(&maps, {}, 120);
+  const Localization fits = Localize(query, place_first, second);
+  ASSERT_FALSE(fits.hits.empty());
+  EXPECT_EQ(fits.hits[0].map_id, 120u);
+  EXPECT_EQ(fits.stats.maps_matched, 1u);  // no second round
 }
 
 // The same queries with their place stored (every third map) and with every
