@@ -185,6 +185,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       options.verify_maps = config_.busy_verify_candidates;
       options.passed_over_retries = 0;  // retries are depth too
       options.fit_rank_maps = 0;        // and so is reading the grids of maps it will not verify
+      options.second_round_hypotheses = 0;
       query.reduced_depth = true;
     }
     if (busy && config_.busy_search_candidates > 0 &&
