@@ -195,7 +195,7 @@ double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& gues
 }
 
 void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
-               std::vector<PlaceHypothesis>* hypotheses) {
+               double block_m, std::vector<PlaceHypothesis>* hypotheses) {
   std::unordered_map<uint64_t, std::shared_ptr<const PreparedMap>> maps;  // each read once
   std::vector<std::pair<double, PlaceHypothesis>> ranked;
   for (const PlaceHypothesis& h : *hypotheses) {
@@ -205,8 +205,7 @@ void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeO
       it = maps.emplace(h.map_id, source.Prepared(h.map_id)).first;
     }
     const double fit =
-        it->second ? FitNear(query, *it->second, HypothesisPose(h, query.map->heading), options.match.window_m,
-                             options.fit_rank_block_m)
+        it->second ? FitNear(query, *it->second, HypothesisPose(h, query.map->heading), options.match.window_m, block_m)
                    : 0.0;
     ranked.push_back({fit, h});
   }
@@ -332,9 +331,7 @@ std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSo
   for (const PlaceHypothesis& h : hypotheses) {
     if (done.count(h.map_id) == 0) second.push_back(h);
   }
-  LocalizeOptions coarse = options;
-  coarse.fit_rank_block_m = options.second_round_block_m;
-  RankByFit(query, source, coarse, second.size(), &second);
+  RankByFit(query, source, options, second.size(), options.second_round_block_m, &second);
   stats->search_ms += MsSince(t);
   std::vector<Candidate> chosen;
   std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, second, options, options.match, stop, stats, &chosen);
@@ -357,7 +354,9 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   const auto first_end = all.begin() + static_cast<std::ptrdiff_t>(std::min(all.size(), options.search.max_hypotheses));
   std::vector<PlaceHypothesis> first(all.begin(), first_end);
   stats->hypotheses = first.size();
-  if (options.fit_rank_maps > 0) RankByFit(query, source, options, options.fit_rank_maps, &first);
+  if (options.fit_rank_maps > 0) {
+    RankByFit(query, source, options, options.fit_rank_maps, options.fit_rank_block_m, &first);
+  }
   stats->search_ms += MsSince(t);
   std::vector<Candidate> verified;
   std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, first, options, options.match, stop, stats, &verified);

@@ -86,8 +86,8 @@ struct LocalizeOptions {
   // finds them there, where the query's walls line up. Costs nothing where
   // a map fits. 0: no second round. Decided on the tuning logs (lmd-eval
   // global-misses --every 3, aces, fr079, intel, orebro): 43 -> 37 misses
-  // of 417 (1600 hypotheses with 0.4 m blocks: 35; the fit of only the
-  // first 200 maps: 37; 10 maps verified: 38). 1600 / 0.4 m cost frcampus
+  // of 417 (1600 hypotheses with 0.4 m blocks: 35, with only their first
+  // 200 maps ranked: 37; 800 with 10 maps verified: 38). 1600 / 0.4 m cost frcampus
   // (held out, served) p99 196 ms of lmdd CPU per query against 41 without
   // a second round; 800 / 0.8 m, 94 ms.
   size_t second_round_hypotheses = 800;

@@ -42,9 +42,10 @@ std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const 
 double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& guess, double window_m, double block_m);
 
 // The hypotheses of the first max_maps maps, in order of the query's fit
-// near each (LocalizeOptions::fit_rank_maps), then the others as they were.
+// near each (FitNear within options.match.window_m, from blocks of
+// block_m; LocalizeOptions::fit_rank_maps), then the others as they were.
 void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
-               std::vector<PlaceHypothesis>* hypotheses);
+               double block_m, std::vector<PlaceHypothesis>* hypotheses);
 
 // A map passed over for chosen route neighbours, with its guesses.
 struct PassedOver {

@@ -868,13 +868,13 @@ TEST(LocalizerTest, HypothesesAreRankedByTheQuerysFitNearEach) {
   const std::vector<PlaceHypothesis> by_votes = {at_own_frame(30, 9), at_own_frame(60, 8), at_own_frame(200, 7),
                                                  at_own_frame(120, 2)};
   std::vector<PlaceHypothesis> ranked = by_votes;
-  localize_internal::RankByFit(query, maps, kOptions, kOptions.fit_rank_maps, &ranked);
+  localize_internal::RankByFit(query, maps, kOptions, kOptions.fit_rank_maps, kOptions.fit_rank_block_m, &ranked);
   ASSERT_EQ(ranked.size(), by_votes.size());
   EXPECT_EQ(ranked[0].map_id, 120u);
   LocalizeOptions three = kOptions;
   three.fit_rank_maps = 3;
   ranked = by_votes;
-  localize_internal::RankByFit(query, maps, three, three.fit_rank_maps, &ranked);
+  localize_internal::RankByFit(query, maps, three, three.fit_rank_maps, three.fit_rank_block_m, &ranked);
   ASSERT_EQ(ranked.size(), by_votes.size());
   EXPECT_EQ(ranked.back().map_id, 120u);
 }
