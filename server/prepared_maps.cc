@@ -24,7 +24,15 @@ void PreparedMapCache::Put(const std::string& collection, uint64_t index_id,
   const size_t size = prepared->MemoryBytes();
   const std::string key = KeyOf(collection, index_id);
   std::lock_guard<std::mutex> lock(mutex_);
-  if (capacity_bytes_ == 0 || size > capacity_bytes_ || index_.count(key) != 0) return;
+  if (capacity_bytes_ == 0 || size > capacity_bytes_) return;
+  const auto it = index_.find(key);
+  if (it != index_.end()) {
+    const std::shared_ptr<const PreparedMap>& held = it->second->second;
+    if (!held->SearchGridOnly() || prepared->SearchGridOnly()) return;
+    bytes_ -= held->MemoryBytes();  // a search grid completed: the complete map replaces it
+    entries_.erase(it->second);
+    index_.erase(it);
+  }
   entries_.emplace_front(key, std::move(prepared));
   index_[key] = entries_.begin();
   bytes_ += size;

@@ -26,7 +26,8 @@ class PreparedMapCache {
 
   // Null when absent.
   std::shared_ptr<const PreparedMap> Find(const std::string& collection, uint64_t index_id);
-  // Adds (if it fits and is new) and drops the least recent beyond the budget.
+  // Adds (if it fits and is new, or completes a search grid held:
+  // PreparedMap::SearchGridOnly) and drops the least recent beyond the budget.
   void Put(const std::string& collection, uint64_t index_id, std::shared_ptr<const PreparedMap> prepared);
 
   size_t bytes() const;

@@ -12,15 +12,30 @@ std::vector<PlaceHypothesis> StoreMapSource::Search(const PlaceFeatures& query, 
 }
 
 std::shared_ptr<const PreparedMap> StoreMapSource::Prepared(uint64_t map_id) const {
+  std::shared_ptr<const PreparedMap> cached = cache_->Find(collection_, map_id);
+  if (cached && !cached->SearchGridOnly()) return cached;
+  Result<IndexedEntry> entry = store_->Indexed(collection_, map_id);
+  if (!entry.ok()) return nullptr;
+  Result<v1::StoredMap> stored = store_->GetMap(collection_, entry->map_id);
+  if (!stored.ok()) return nullptr;  // deleted meanwhile
+  const LocalMap map = MethodView(FromProto(stored->map()));
+  const PreparedMapOptions& options = store_->indexing().localize.match.map;
+  auto prepared = std::make_shared<const PreparedMap>(
+      cached ? CompletePreparation(*cached, map, entry->heading) : PrepareMap(map, options, entry->heading));
+  cache_->Put(collection_, map_id, prepared);
+  return prepared;
+}
+
+std::shared_ptr<const PreparedMap> StoreMapSource::SearchGrid(uint64_t map_id) const {
   if (std::shared_ptr<const PreparedMap> cached = cache_->Find(collection_, map_id)) return cached;
   Result<IndexedEntry> entry = store_->Indexed(collection_, map_id);
   if (!entry.ok()) return nullptr;
   Result<v1::StoredMap> stored = store_->GetMap(collection_, entry->map_id);
   if (!stored.ok()) return nullptr;  // deleted meanwhile
-  auto prepared = std::make_shared<const PreparedMap>(
-      PrepareMap(MethodView(FromProto(stored->map())), store_->indexing().localize.match.map, entry->heading));
-  cache_->Put(collection_, map_id, prepared);
-  return prepared;
+  auto grid = std::make_shared<const PreparedMap>(
+      PrepareSearchGrid(MethodView(FromProto(stored->map())).points, store_->indexing().localize.match.map));
+  cache_->Put(collection_, map_id, grid);
+  return grid;
 }
 
 bool StoreMapSource::RouteOf(uint64_t map_id, Route* route) const {

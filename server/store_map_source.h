@@ -1,6 +1,7 @@
 // The default method's view of one collection of lmdd's store (MapSource,
 // core/localize/map_source.h): the store's place index, maps prepared for
-// scan matching from the cache or, on a miss, from the stored map, and
+// scan matching (or gridded for a coarse fit alone) from the cache or, on a
+// miss, from the stored map, and
 // routes from the maps' metadata. Ids are the store's index ids. One per
 // query: it carries the request's excluded map ids.
 #pragma once
@@ -28,6 +29,7 @@ class StoreMapSource : public MapSource {
                                       const std::function<bool(uint64_t)>& excluded,
                                       PlaceSearchStats* stats) const override;
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override;
+  std::shared_ptr<const PreparedMap> SearchGrid(uint64_t map_id) const override;
   bool RouteOf(uint64_t map_id, Route* route) const override;
   std::optional<Pose2> AnchorOf(uint64_t map_id) const override;
   bool HasAnchors() const override;

@@ -259,6 +259,7 @@ struct CompactMap {
 // Preparations made by Prepared() on the calling thread (the query's).
 struct PrepareTally {
   size_t count = 0;
+  size_t grids = 0;  // of count: search grids alone (MapSource::SearchGrid)
   double cpu_ms = 0;
 };
 thread_local PrepareTally tally;
@@ -292,32 +293,25 @@ class SimulatedStore : public MapSource {
 
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override {
     if (map_id >= maps_.size()) return nullptr;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      const auto it = where_.find(map_id);
-      if (it != where_.end()) {
-        lru_.splice(lru_.begin(), lru_, it->second);
-        return it->second->second;
-      }
-    }
+    const std::shared_ptr<const PreparedMap> cached = Find(map_id);
+    if (cached && !cached->SearchGridOnly()) return cached;
     const double c0 = ThreadCpuMs();
-    auto prepared = std::make_shared<const PreparedMap>(PrepareMap(maps_[map_id].Expand(), prepare_, index_.Heading(map_id)));
-    tally.cpu_ms += ThreadCpuMs() - c0;
-    ++tally.count;
-    preparations_.fetch_add(1);
-    const size_t size = prepared->MemoryBytes();
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (cache_bytes_ == 0 || size > cache_bytes_ || where_.count(map_id) != 0) return prepared;
-    lru_.emplace_front(map_id, prepared);
-    where_[map_id] = lru_.begin();
-    cached_bytes_ += size;
-    while (cached_bytes_ > cache_bytes_) {
-      cached_bytes_ -= lru_.back().second->MemoryBytes();
-      where_.erase(lru_.back().first);
-      lru_.pop_back();
-      ++evictions_;
-    }
+    const LocalMap map = maps_[map_id].Expand();
+    auto prepared = std::make_shared<const PreparedMap>(
+        cached ? CompletePreparation(*cached, map, index_.Heading(map_id)) : PrepareMap(map, prepare_, index_.Heading(map_id)));
+    Tally(c0, false);
+    Put(map_id, prepared);
     return prepared;
+  }
+
+  std::shared_ptr<const PreparedMap> SearchGrid(uint64_t map_id) const override {
+    if (map_id >= maps_.size()) return nullptr;
+    if (std::shared_ptr<const PreparedMap> cached = Find(map_id)) return cached;
+    const double c0 = ThreadCpuMs();
+    auto grid = std::make_shared<const PreparedMap>(PrepareSearchGrid(maps_[map_id].Expand().points, prepare_));
+    Tally(c0, true);
+    Put(map_id, grid);
+    return grid;
   }
 
   bool RouteOf(uint64_t map_id, Route* route) const override {
@@ -349,6 +343,44 @@ class SimulatedStore : public MapSource {
   }
 
  private:
+  std::shared_ptr<const PreparedMap> Find(uint64_t map_id) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = where_.find(map_id);
+    if (it == where_.end()) return nullptr;
+    lru_.splice(lru_.begin(), lru_, it->second);
+    return it->second->second;
+  }
+
+  void Tally(double cpu_start_ms, bool grid_only) const {
+    tally.cpu_ms += ThreadCpuMs() - cpu_start_ms;
+    ++tally.count;
+    tally.grids += grid_only;
+    preparations_.fetch_add(1);
+  }
+
+  // Adds, or completes a search grid held (as PreparedMapCache::Put does).
+  void Put(uint64_t map_id, std::shared_ptr<const PreparedMap> prepared) const {
+    const size_t size = prepared->MemoryBytes();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (cache_bytes_ == 0 || size > cache_bytes_) return;
+    const auto it = where_.find(map_id);
+    if (it != where_.end()) {
+      if (!it->second->second->SearchGridOnly() || prepared->SearchGridOnly()) return;
+      cached_bytes_ -= it->second->second->MemoryBytes();
+      lru_.erase(it->second);
+      where_.erase(it);
+    }
+    lru_.emplace_front(map_id, std::move(prepared));
+    where_[map_id] = lru_.begin();
+    cached_bytes_ += size;
+    while (cached_bytes_ > cache_bytes_) {
+      cached_bytes_ -= lru_.back().second->MemoryBytes();
+      where_.erase(lru_.back().first);
+      lru_.pop_back();
+      ++evictions_;
+    }
+  }
+
   PlaceIndex index_;
   std::vector<CompactMap> maps_;
   const size_t cache_bytes_;
@@ -405,6 +437,7 @@ struct QueryResult {
   double warm_cpu_ms = 0;           // Localize again
   double cold_wall_ms = 0;
   size_t preparations = 0;          // in the cold Localize
+  size_t grid_preparations = 0;     // of them search grids alone (for the fit ranking)
   double preparation_cpu_ms = 0;
   size_t warm_preparations = 0;
   PlaceSearchStats search;
@@ -559,6 +592,7 @@ int RunPlacesBench(int argc, char** argv) {
           r.cold_wall_ms = Seconds(t) * 1e3;
           r.cold_cpu_ms = ThreadCpuMs() - c;
           r.preparations = tally.count;
+          r.grid_preparations = tally.grids;
           r.preparation_cpu_ms = tally.cpu_ms;
           r.hypotheses = cold.stats.hypotheses;
           r.maps_matched = cold.stats.maps_matched;
@@ -627,9 +661,10 @@ int RunPlacesBench(int argc, char** argv) {
     for (const QueryResult& r : results) k += r.*field;
     return static_cast<double>(k) / nq;
   };
-  size_t sure = 0, sure_right = 0, preparations = 0, warm_preparations = 0, warm_same = 0;
+  size_t sure = 0, sure_right = 0, preparations = 0, grid_preparations = 0, warm_preparations = 0, warm_same = 0;
   for (const QueryResult& r : results) {
     sure += r.sure, sure_right += r.right, preparations += r.preparations, warm_preparations += r.warm_preparations;
+    grid_preparations += r.grid_preparations;
     warm_same += r.same_answer_warm;
   }
   const std::vector<double> search_cpu = Column(results, [](const QueryResult& r) { return r.search_cpu_ms; });
@@ -676,8 +711,9 @@ int RunPlacesBench(int argc, char** argv) {
               Mean(search_cpu));
   std::printf("    Localize, cold     %8.2f  %8.2f  %8.2f   (wall p50 %.2f ms)\n", Quantile(cold_cpu, 0.5),
               Quantile(cold_cpu, 0.99), Mean(cold_cpu), Quantile(cold_wall, 0.5));
-  std::printf("      of it preparing  %8.2f  %8.2f  %8.2f   (%zu preparations, %.1f per query p50, %.2f ms each)\n",
-              Quantile(prep_cpu, 0.5), Quantile(prep_cpu, 0.99), Mean(prep_cpu), preparations,
+  std::printf("      of it preparing  %8.2f  %8.2f  %8.2f   (%zu preparations, %zu of them search grids alone, "
+              "%.1f per query p50, %.2f ms each)\n",
+              Quantile(prep_cpu, 0.5), Quantile(prep_cpu, 0.99), Mean(prep_cpu), preparations, grid_preparations,
               Quantile(prep_count, 0.5), per_prep_ms);
   std::printf("    Localize, warm     %8.2f  %8.2f  %8.2f   (%zu preparations; same answer %zu of %zu)\n",
               Quantile(warm_cpu, 0.5), Quantile(warm_cpu, 0.99), Mean(warm_cpu), warm_preparations, warm_same,
@@ -706,7 +742,8 @@ int RunPlacesBench(int argc, char** argv) {
         "\"prepare_query_cpu_ms_p50\": %.3f, \"search_cpu_ms_p50\": %.3f, \"search_cpu_ms_p99\": %.3f, "
         "\"localize_cold_cpu_ms_p50\": %.3f, \"localize_cold_cpu_ms_p99\": %.3f, "
         "\"localize_warm_cpu_ms_p50\": %.3f, \"localize_warm_cpu_ms_p99\": %.3f, "
-        "\"preparation_cpu_ms_p50\": %.3f, \"preparations\": %zu, \"preparation_cpu_ms_each\": %.3f, "
+        "\"preparation_cpu_ms_p50\": %.3f, \"preparations\": %zu, \"grid_preparations\": %zu, "
+        "\"preparation_cpu_ms_each\": %.3f, "
         "\"candidates_p50\": %.0f, \"maps_matched_p50\": %.1f, \"cache_evictions\": %zu, "
         "\"source_in_hypotheses\": %.3f, \"top_is_source\": %.3f, \"top_shows_place\": %.3f, "
         "\"sure_share\": %.3f, \"sure_right\": %.4f, \"max_rss_mb\": %.0f}\n",
@@ -716,8 +753,8 @@ int RunPlacesBench(int argc, char** argv) {
         static_cast<double>(features_total) / nm, static_cast<double>(encoded_feature_bytes) / nm, index_bytes,
         static_cast<double>(index_bytes) / nm, static_cast<double>(map_bytes) / nm, Quantile(query_cpu, 0.5),
         Quantile(search_cpu, 0.5), Quantile(search_cpu, 0.99), Quantile(cold_cpu, 0.5), Quantile(cold_cpu, 0.99),
-        Quantile(warm_cpu, 0.5), Quantile(warm_cpu, 0.99), Quantile(prep_cpu, 0.5), preparations, per_prep_ms,
-        Quantile(candidates, 0.5), Quantile(matched, 0.5), store.evictions(),
+        Quantile(warm_cpu, 0.5), Quantile(warm_cpu, 0.99), Quantile(prep_cpu, 0.5), preparations, grid_preparations,
+        per_prep_ms, Quantile(candidates, 0.5), Quantile(matched, 0.5), store.evictions(),
         share(&QueryResult::source_in_hypotheses), share(&QueryResult::top_is_source),
         share(&QueryResult::top_shows_place), sure_share, right_share, MaxRssMb());
   }

@@ -67,7 +67,7 @@ void ScoreChildren(const LikelihoodLevel& level, const Rotation& r, int dx, int 
 class BranchAndBound {
  public:
   BranchAndBound(const PreparedMap& db, const std::vector<Rotation>& rotations, const CorrelativeOptions& options)
-      : db_(db), levels_(db.levels()), rotations_(rotations), options_(options) {}
+      : db_(db), rotations_(rotations), options_(options) {}
 
   // True when every translation of the block of 2^level cells at (dx, dy)
   // is excluded: the excluded disk is convex, so its four corners suffice.
@@ -98,7 +98,7 @@ class BranchAndBound {
       const int half = 1 << (level - 1);
       const Rotation& r = rotations_[c.rotation];
       int64_t sums[4];  // (0, 0), (0, half), (half, 0), (half, half)
-      ScoreChildren(levels_[level - 1], r, c.dx, c.dy, half, sums);
+      ScoreChildren(db_.level(level - 1), r, c.dx, c.dy, half, sums);
       std::vector<Block> children;
       children.reserve(4);
       for (int ox = 0, k = 0; ox <= half; ox += half) {
@@ -121,7 +121,6 @@ class BranchAndBound {
 
  private:
   const PreparedMap& db_;
-  const std::vector<LikelihoodLevel>& levels_;
   const std::vector<Rotation>& rotations_;
   const CorrelativeOptions& options_;
 };
@@ -131,7 +130,6 @@ class BranchAndBound {
 double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedMap& db, const SearchRegion& region,
                         double max_block_m) {
   if (query_points.empty() || db.empty()) return 0.0;
-  const std::vector<LikelihoodLevel>& levels = db.levels();
   const double cell = db.options.cell_m;
   Point2 centroid{0, 0};
   for (const Point2& p : query_points) centroid.x += p.x, centroid.y += p.y;
@@ -148,11 +146,12 @@ double CorrelativeBound(const std::vector<Point2>& query_points, const PreparedM
   const int wx = static_cast<int>(std::ceil(std::max(0.0, region.half_window_x_m) / cell));
   const int wy = static_cast<int>(std::ceil(std::max(0.0, region.half_window_y_m) / cell));
   int top = 0;
-  while (top + 1 < static_cast<int>(levels.size()) && (1 << top) < 2 * std::max(wx, wy) + 1) ++top;
+  while (top + 1 < db.options.levels && (1 << top) < 2 * std::max(wx, wy) + 1) ++top;
   while (max_block_m > 0 && top > 0 && (1 << top) * cell > max_block_m + 1e-9) --top;
+  const LikelihoodLevel& level = db.level(top);
   int64_t best = 0;
   for (int dx = -wx; dx <= wx; dx += 1 << top) {
-    for (int dy = -wy; dy <= wy; dy += 1 << top) best = std::max(best, ScoreAt(levels[top], r, dx, dy));
+    for (int dy = -wy; dy <= wy; dy += 1 << top) best = std::max(best, ScoreAt(level, r, dx, dy));
   }
   return static_cast<double>(best) / (255.0 * query_points.size());
 }
@@ -162,7 +161,6 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
                                     const CorrelativeOptions& options) {
   CorrelativeResult result;
   if (query_points.empty() || db.empty() || regions.empty()) return result;
-  const std::vector<LikelihoodLevel>& levels = db.levels();
   const double cell = db.options.cell_m;
   Point2 centroid{0, 0};
   for (const Point2& p : query_points) {
@@ -217,7 +215,7 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   int widest = 1;
   for (const Rotation& r : rotations) widest = std::max({widest, r.x1 - r.x0 + 1, r.y1 - r.y0 + 1});
   int top = 0;
-  while (top + 1 < static_cast<int>(levels.size()) && (1 << top) < widest) ++top;
+  while (top + 1 < db.options.levels && (1 << top) < widest) ++top;
   const int top_step = 1 << top;
   std::vector<Block> candidates;
   BranchAndBound bnb(db, rotations, options);
@@ -225,15 +223,16 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   // Seed the bound with the exact scores at the regions' centres (offset 0):
   // a guess is usually near the optimum, so most blocks are pruned at once.
   for (size_t k = 0; k < rotations.size(); ++k) {
-    const int64_t centre = ScoreAt(levels[0], rotations[k], 0, 0);
+    const int64_t centre = ScoreAt(db.level(0), rotations[k], 0, 0);
     const Block seed{static_cast<int32_t>(k), 0, 0, centre};
     if (centre > bnb.best_.score && !bnb.Excluded(seed, 0)) bnb.best_ = seed;
   }
+  const LikelihoodLevel& top_level = db.level(top);
   for (size_t k = 0; k < rotations.size(); ++k) {
     const Rotation& r = rotations[k];
     for (int dx = r.x0; dx <= r.x1; dx += top_step) {
       for (int dy = r.y0; dy <= r.y1; dy += top_step) {
-        candidates.push_back({static_cast<int32_t>(k), dx, dy, ScoreAt(levels[top], r, dx, dy)});
+        candidates.push_back({static_cast<int32_t>(k), dx, dy, ScoreAt(top_level, r, dx, dy)});
       }
     }
   }

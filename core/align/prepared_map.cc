@@ -26,7 +26,8 @@ LikelihoodLevel NextLevel(const LikelihoodLevel& prev, int h) {
   next.height = prev.height + half;
   const size_t pw = static_cast<size_t>(prev.width), nw = static_cast<size_t>(next.width);
   // Pass along x: prev's rows, next's width.
-  std::vector<uint8_t> tmp(nw * prev.height, 0);
+  thread_local std::vector<uint8_t> tmp;  // scratch, as BaseLevel's nearest2
+  tmp.assign(nw * prev.height, 0);
   for (int iy = 0; iy < prev.height; ++iy) {
     const uint8_t* in = prev.values.data() + iy * pw;
     uint8_t* out = tmp.data() + iy * nw;
@@ -55,7 +56,7 @@ void PlacePyramid(PreparedMap* m) {
   m->grid_height = static_cast<int>(std::ceil((m->max_corner.y - m->grid_origin.y) / o.cell_m)) + r + 2;
 }
 
-std::vector<LikelihoodLevel> BuildPyramid(const PreparedMap& m) {
+LikelihoodLevel BaseLevel(const PreparedMap& m) {
   const PreparedMapOptions& o = m.options;
   const double sigma = KernelSigma(o);
   const double reach = KernelReach(o);
@@ -68,7 +69,10 @@ std::vector<LikelihoodLevel> BuildPyramid(const PreparedMap& m) {
   // The value falls with distance, so a cell's value is that of its nearest
   // point: find the smallest squared distance per cell, then one exp per cell.
   const double reach2 = reach * reach;
-  std::vector<double> nearest2(base.values.size(), std::numeric_limits<double>::infinity());
+  // Per-thread scratch: a fresh grid-sized allocation per map cost more in
+  // page faults than the search that fills it (a cold query prepares ~50).
+  thread_local std::vector<double> nearest2;
+  nearest2.assign(base.values.size(), std::numeric_limits<double>::infinity());
   for (const Point2& p : m.points) {
     const int cx = static_cast<int>(std::floor((p.x - m.grid_origin.x) / o.cell_m));
     const int cy = static_cast<int>(std::floor((p.y - m.grid_origin.y) / o.cell_m));
@@ -85,10 +89,7 @@ std::vector<LikelihoodLevel> BuildPyramid(const PreparedMap& m) {
   for (size_t k = 0; k < nearest2.size(); ++k) {
     if (nearest2[k] <= reach2) base.values[k] = static_cast<uint8_t>(std::lround(255.0 * std::exp(-nearest2[k] * inv2s2)));
   }
-  std::vector<LikelihoodLevel> levels;
-  levels.push_back(std::move(base));
-  for (int h = 1; h < o.levels; ++h) levels.push_back(NextLevel(levels.back(), h));
-  return levels;
+  return base;
 }
 
 // Sorts the points by bucket (row-major, stable), so that a bucket, and a
@@ -158,11 +159,19 @@ void BuildNormals(PreparedMap* m) {
 
 }  // namespace
 
-const std::vector<LikelihoodLevel>& PreparedMap::levels() const {
-  std::call_once(pyramid_->built, [this] {
-    if (!empty()) pyramid_->levels = BuildPyramid(*this);
-  });
-  return pyramid_->levels;
+const LikelihoodLevel& PreparedMap::level(int h) const {
+  static const LikelihoodLevel kNone;
+  if (empty() || h < 0 || h >= options.levels) return kNone;
+  LazyPyramid& pyramid = *pyramid_;
+  if (pyramid.built.load(std::memory_order_acquire) <= h) {
+    std::lock_guard<std::mutex> lock(pyramid.mutex);
+    if (pyramid.levels.empty()) pyramid.levels.reserve(static_cast<size_t>(options.levels));
+    for (int next = static_cast<int>(pyramid.levels.size()); next <= h; ++next) {
+      pyramid.levels.push_back(next == 0 ? BaseLevel(*this) : NextLevel(pyramid.levels.back(), next));
+      pyramid.built.store(next + 1, std::memory_order_release);
+    }
+  }
+  return pyramid.levels[static_cast<size_t>(h)];
 }
 
 size_t PreparedMap::MemoryBytes() const {
@@ -199,23 +208,37 @@ PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedM
   return m;
 }
 
+namespace {
+
+// PreparePoints' part after PrepareSearchGrid.
+void AddPointStructures(PreparedMap* m, std::optional<double> known_heading) {
+  const PreparedMapOptions& o = m->options;
+  m->heading = known_heading ? *known_heading : EstimateDominantOrientation(m->points, o.orientation);
+  m->sparse_points = DeduplicatePoints(m->points, std::max(0.01, o.sparse_cell_m));
+  BuildBuckets(m);  // reorders the points, not their set: the pyramid stays valid
+  BuildNormals(m);
+}
+
+}  // namespace
+
 PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOptions& options,
                           std::optional<double> known_heading) {
   PreparedMap m = PrepareSearchGrid(points, options);
-  if (m.points.empty()) return m;
-  m.heading = known_heading ? *known_heading : EstimateDominantOrientation(m.points, options.orientation);
-  m.sparse_points = DeduplicatePoints(m.points, std::max(0.01, options.sparse_cell_m));
-  BuildBuckets(&m);
-  BuildNormals(&m);
+  if (!m.empty()) AddPointStructures(&m, known_heading);
   return m;
 }
 
 PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options, std::optional<double> known_heading) {
-  PreparedMap m = PreparePoints(map.points, options, known_heading);
-  if (options.free_space && !m.empty() && (!map.scans.empty() || !map.trajectory.empty())) {
-    m.occupancy = BuildOccupancyGrid(map, 0.0, options.free_grid);
+  return CompletePreparation(PrepareSearchGrid(map.points, options), map, known_heading);
+}
+
+PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map, std::optional<double> known_heading) {
+  if (grid.empty() || !grid.SearchGridOnly()) return grid;
+  AddPointStructures(&grid, known_heading);
+  if (grid.options.free_space && (!map.scans.empty() || !map.trajectory.empty())) {
+    grid.occupancy = BuildOccupancyGrid(map, 0.0, grid.options.free_grid);
   }
-  return m;
+  return grid;
 }
 
 bool InFreeSpace(const PreparedMap& map, const Point2& p) {

@@ -11,6 +11,7 @@
 // bounds the level-0 score of every translation in a 2^h-cell block.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -82,12 +83,14 @@ struct PreparedMap {
   // Likelihood pyramid; grid_origin = own-frame position of level-0 cell (0, 0)'s lower-left corner.
   Point2 grid_origin;
   int grid_width = 0, grid_height = 0;  // level-0 size in cells
-  // The pyramid's levels, built on the first call (thread-safe) and shared
-  // by copies: only a map matched against needs them, and most of a
-  // fleet's maps are prepared as queries and stored but never matched
-  // against (the pyramid was half of preparing one). Built from `points`
-  // and the grid above, which must not change once prepared.
-  const std::vector<LikelihoodLevel>& levels() const;
+  // Pyramid level h (0 <= h < options.levels; an empty level otherwise or
+  // for an empty map), built on first use together with the levels below it
+  // (thread-safe) and shared by copies: only a map matched against needs
+  // them, and a coarse bound (CorrelativeBound) needs only the lower ones.
+  // Most of a fleet's maps are prepared as queries and stored but never
+  // matched against (the pyramid was half of preparing one). Built from the
+  // set of `points` and the grid above, which must not change once prepared.
+  const LikelihoodLevel& level(int h) const;
 
   // Free space of the db map (rotation 0); empty (0 x 0) when not built.
   OccupancyGrid occupancy;
@@ -99,14 +102,17 @@ struct PreparedMap {
   std::vector<uint32_t> bucket_start;   // size w*h + 1
 
   bool empty() const { return points.empty(); }
+  // True for a map from PrepareSearchGrid: points, box and pyramid only.
+  bool SearchGridOnly() const { return !points.empty() && bucket_start.empty(); }
   // Approximate heap size in bytes (for caches), the pyramid counted
   // whether built yet or not.
   size_t MemoryBytes() const;
 
  private:
   struct LazyPyramid {
-    std::once_flag built;
-    std::vector<LikelihoodLevel> levels;
+    std::mutex mutex;             // held while a level is built
+    std::atomic<int> built{0};    // levels [0, built) are complete
+    std::vector<LikelihoodLevel> levels;  // capacity reserved before the first: references stay valid
   };
   std::shared_ptr<LazyPyramid> pyramid_ = std::make_shared<LazyPyramid>();
 };
@@ -130,6 +136,13 @@ PreparedMap PreparePoints(const std::vector<Point2>& points, const PreparedMapOp
 // maps' points fused (core/localize/site_grid.h). Points that are not finite
 // are dropped; options are clamped as PreparePoints clamps them.
 PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedMapOptions& options = {});
+
+// PrepareSearchGrid(map.points, options) completed into PrepareMap(map,
+// options, known_heading), its pyramid shared, with whatever levels it has
+// built already: a map read for a coarse fit (RankByFit) and then matched
+// against is gridded once. A map already complete is returned as it is.
+PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map,
+                                std::optional<double> known_heading = std::nullopt);
 
 // Index of the map point nearest to p within max_dist_m (<= neighbour_cell_m),
 // or -1 if none. *dist2 (if not null) receives its squared distance.

@@ -202,7 +202,7 @@ void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeO
     auto it = maps.find(h.map_id);
     if (it == maps.end()) {
       if (maps.size() >= max_maps) break;
-      it = maps.emplace(h.map_id, source.Prepared(h.map_id)).first;
+      it = maps.emplace(h.map_id, source.SearchGrid(h.map_id)).first;
     }
     const double fit =
         it->second ? FitNear(query, *it->second, HypothesisPose(h, query.map->heading), options.match.window_m, block_m)

@@ -30,6 +30,13 @@ class MapSource {
   // free space, heading = its place features' compass heading); null if it
   // is no longer stored. Thread-safe.
   virtual std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const = 0;
+  // The stored map `map_id` prepared at least for the correlative search
+  // (PrepareSearchGrid: its points and pyramid), all a coarse fit needs
+  // (CorrelativeBound); null if it is no longer stored. A source that
+  // prepares maps on demand returns the grid alone when it has nothing
+  // more, and completes it in Prepared() (CompletePreparation): most maps
+  // fitted are never matched against. Default: Prepared(). Thread-safe.
+  virtual std::shared_ptr<const PreparedMap> SearchGrid(uint64_t map_id) const { return Prepared(map_id); }
 
   // Where a stored map lies on the route of the robot that made it: the
   // robot, and the map's number in the robot's sequence of maps. Maps a few

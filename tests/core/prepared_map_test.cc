@@ -46,24 +46,34 @@ TEST(PreparedMapTest, NearestPointIsTheBruteForceNearest) {
   }
 }
 
-// The pyramid is built on first use: a cache sizes a map before that, so
-// MemoryBytes must count it already; copies and threads share one pyramid.
+// The pyramid is built on first use, a level with those below it: a cache
+// sizes a map before that, so MemoryBytes must count it already; copies and
+// threads share one pyramid, and a level stays where it was built when
+// coarser ones follow.
 TEST(PreparedMapTest, LazyPyramidIsCountedBeforeItIsBuiltAndBuiltOnce) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> coord(-6.0, 6.0);
   std::vector<Point2> points;
   for (int i = 0; i < 300; ++i) points.push_back({coord(rng), coord(rng)});
   const PreparedMap map = PreparePoints(points, PreparedMapOptions());
+  const int levels = map.options.levels;
+  ASSERT_EQ(levels, PreparedMapOptions().levels);
   const size_t before = map.MemoryBytes();
   const PreparedMap copy = map;
-  std::vector<const std::vector<LikelihoodLevel>*> seen(4, nullptr);
+  const LikelihoodLevel* base = &copy.level(0);
+  const std::vector<uint8_t> base_values = base->values;
+  std::vector<const LikelihoodLevel*> seen(4, nullptr);
   std::vector<std::thread> threads;
-  for (size_t t = 0; t < seen.size(); ++t) threads.emplace_back([&, t] { seen[t] = &(t % 2 ? copy : map).levels(); });
+  for (size_t t = 0; t < seen.size(); ++t) {
+    threads.emplace_back([&, t] { seen[t] = &(t % 2 ? copy : map).level(levels - 1); });
+  }
   for (std::thread& t : threads) t.join();
-  for (const auto* levels : seen) EXPECT_EQ(levels, seen[0]);
-  ASSERT_EQ(seen[0]->size(), static_cast<size_t>(PreparedMapOptions().levels));
+  for (const LikelihoodLevel* top : seen) EXPECT_EQ(top, seen[0]);
+  EXPECT_EQ(&map.level(0), base);
+  EXPECT_EQ(base->values, base_values);
+  EXPECT_TRUE(map.level(levels).values.empty());
   size_t pyramid = 0;
-  for (const LikelihoodLevel& l : *seen[0]) pyramid += l.values.size();
+  for (int h = 0; h < levels; ++h) pyramid += map.level(h).values.size();
   EXPECT_GT(pyramid, 0u);
   EXPECT_EQ(map.MemoryBytes(), before);
   const PreparedMap no_pyramid = PreparePoints(points, [] {
@@ -71,7 +81,7 @@ TEST(PreparedMapTest, LazyPyramidIsCountedBeforeItIsBuiltAndBuiltOnce) {
     o.levels = 1;
     return o;
   }());
-  EXPECT_EQ(before - no_pyramid.MemoryBytes(), pyramid - no_pyramid.levels()[0].values.size());
+  EXPECT_EQ(before - no_pyramid.MemoryBytes(), pyramid - no_pyramid.level(0).values.size());
 }
 
 }  // namespace

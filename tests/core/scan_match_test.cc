@@ -266,13 +266,43 @@ TEST(ScanMatchTest, CorrelativeBoundFromFinerBlocksStillBoundsTheSearch) {
   EXPECT_GE(tighter, 1u);  // the finer blocks tell something the coarsest did not
 }
 
+std::vector<double> Flat(const std::vector<Point2>& points) {
+  std::vector<double> flat;
+  for (const Point2& p : points) flat.insert(flat.end(), {p.x, p.y});
+  return flat;
+}
+
+// A map gridded for a coarse fit (PrepareSearchGrid, a level built) and
+// completed later is PrepareMap's, down to the pyramid, which it shares.
+TEST(ScanMatchTest, ACompletedSearchGridIsThePreparedMap) {
+  const LocalMap& db = RichMap();
+  ASSERT_FALSE(db.scans.empty());
+  const PreparedMapOptions options;
+  const PreparedMap full = PrepareMap(db, options, 0.3);
+  const PreparedMap grid = PrepareSearchGrid(db.points, options);
+  ASSERT_TRUE(grid.SearchGridOnly());
+  const LikelihoodLevel* fit_level = &grid.level(1);
+  const PreparedMap done = CompletePreparation(grid, db, 0.3);
+  EXPECT_FALSE(done.SearchGridOnly());
+  EXPECT_EQ(&done.level(1), fit_level);
+  EXPECT_EQ(done.heading, full.heading);
+  EXPECT_EQ(Flat(done.points), Flat(full.points));
+  EXPECT_EQ(Flat(done.sparse_points), Flat(full.sparse_points));
+  EXPECT_EQ(Flat(done.normals), Flat(full.normals));
+  EXPECT_EQ(done.bucket_start, full.bucket_start);
+  EXPECT_GT(done.occupancy.Count(CellState::kFree), 0u);
+  EXPECT_EQ(done.occupancy.cells(), full.occupancy.cells());
+  EXPECT_EQ(done.MemoryBytes(), full.MemoryBytes());
+  for (int h = 0; h < options.levels; ++h) EXPECT_EQ(done.level(h).values, full.level(h).values) << h;
+}
+
 TEST(ScanMatchTest, PreparedMapPyramidBoundsEveryFinerLevel) {
   const PreparedMap m = PrepareMap(RichMap());
-  ASSERT_GE(m.levels().size(), 2u);
+  ASSERT_GE(m.options.levels, 2);
   // Level h at (x, y) is the max of level 0 over the 2^h block starting there.
-  const LikelihoodLevel& l0 = m.levels()[0];
-  for (size_t h = 1; h < m.levels().size(); ++h) {
-    const LikelihoodLevel& lh = m.levels()[h];
+  const LikelihoodLevel& l0 = m.level(0);
+  for (int h = 1; h < m.options.levels; ++h) {
+    const LikelihoodLevel& lh = m.level(h);
     const int block = 1 << h;
     for (int y = -lh.pad; y < lh.height - lh.pad; y += 7) {
       for (int x = -lh.pad; x < lh.width - lh.pad; x += 5) {
