@@ -1,6 +1,8 @@
 // PreparedMapCache: stored maps prepared for scan matching (likelihood
-// pyramids, buckets, free space: ~100-200 KB each, 1-5 ms to build), kept in
-// memory up to a byte budget, least recently used dropped first. Keyed by
+// pyramids, buckets, free space: ~100-200 KB each, 1-5 ms to build), or
+// gridded alone for a coarse fit (PreparedMap::SearchGridOnly, completed and
+// replaced when matched against), kept in memory up to a byte budget, least
+// recently used dropped first. Keyed by
 // collection and the map's index id, which changes whenever a map is
 // replaced, so an entry is never stale. A map is put here when it is
 // inserted (prepared anyway, with its place features) and found again when

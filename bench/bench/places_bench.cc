@@ -21,7 +21,8 @@
 //      Prepared() from an LRU cache of M MiB of PreparedMaps (empty at the
 //      start, as lmdd's after a restart), preparing a missing map on demand
 //      as lmdd does (PrepareMap with free space, heading from the stored
-//      features). Each query is timed three times on its worker thread
+//      features; a map the fit ranking reads alone is gridded alone,
+//      SearchGrid). Each query is timed three times on its worker thread
 //      (CLOCK_THREAD_CPUTIME_ID): the first-stage Search alone, the whole
 //      Localize cold (as it runs: cache misses prepared inside it), and the
 //      whole Localize again, warm (every map it verifies now cached).
@@ -256,7 +257,7 @@ struct CompactMap {
   }
 };
 
-// Preparations made by Prepared() on the calling thread (the query's).
+// Preparations made by Prepared() and SearchGrid() on the calling thread (the query's).
 struct PrepareTally {
   size_t count = 0;
   size_t grids = 0;  // of count: search grids alone (MapSource::SearchGrid)
@@ -265,10 +266,12 @@ struct PrepareTally {
 thread_local PrepareTally tally;
 
 // The stored maps as a MapSource, as lmdd's StoreMapSource serves its store:
-// Search from the place index; Prepared() from an LRU cache of prepared maps
-// bounded in bytes (server/prepared_maps.h's policy: an entry larger than the
-// budget is not kept; least recent dropped first), a miss prepared from the
-// compact map with the stored features' heading; RouteOf = (0, map number).
+// Search from the place index; Prepared() and SearchGrid() from an LRU cache
+// of prepared maps bounded in bytes (server/prepared_maps.h's policy: an
+// entry larger than the budget is not kept; least recent dropped first; a
+// grid alone replaced by the complete map), a miss prepared (or gridded)
+// from the compact map with the stored features' heading; RouteOf = (0, map
+// number).
 // Search, Prepared and RouteOf may run concurrently once the maps are added;
 // two queries that miss the same map both prepare it (as with lmdd's cache).
 class SimulatedStore : public MapSource {

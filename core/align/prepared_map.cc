@@ -71,6 +71,8 @@ LikelihoodLevel BaseLevel(const PreparedMap& m) {
   const double reach2 = reach * reach;
   // Per-thread scratch: a fresh grid-sized allocation per map cost more in
   // page faults than the search that fills it (a cold query prepares ~50).
+  // A thread keeps 9 bytes per cell of the largest grid it built (a local
+  // map's: well under 1 MB; a site grid's: a few MB).
   thread_local std::vector<double> nearest2;
   nearest2.assign(base.values.size(), std::numeric_limits<double>::infinity());
   for (const Point2& p : m.points) {
@@ -161,13 +163,12 @@ void BuildNormals(PreparedMap* m) {
 
 const LikelihoodLevel& PreparedMap::level(int h) const {
   static const LikelihoodLevel kNone;
-  if (empty() || h < 0 || h >= options.levels) return kNone;
+  if (empty() || h < 0 || h >= std::min(options.levels, kMaxPyramidLevels)) return kNone;
   LazyPyramid& pyramid = *pyramid_;
   if (pyramid.built.load(std::memory_order_acquire) <= h) {
     std::lock_guard<std::mutex> lock(pyramid.mutex);
-    if (pyramid.levels.empty()) pyramid.levels.reserve(static_cast<size_t>(options.levels));
-    for (int next = static_cast<int>(pyramid.levels.size()); next <= h; ++next) {
-      pyramid.levels.push_back(next == 0 ? BaseLevel(*this) : NextLevel(pyramid.levels.back(), next));
+    for (int next = pyramid.built.load(std::memory_order_relaxed); next <= h; ++next) {
+      pyramid.levels[next] = next == 0 ? BaseLevel(*this) : NextLevel(pyramid.levels[next - 1], next);
       pyramid.built.store(next + 1, std::memory_order_release);
     }
   }
@@ -190,7 +191,7 @@ PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedM
   PreparedMap m;
   m.options = options;
   m.options.cell_m = std::max(0.01, options.cell_m);
-  m.options.levels = std::min(12, std::max(1, options.levels));
+  m.options.levels = std::min(kMaxPyramidLevels, std::max(1, options.levels));
   m.options.neighbour_cell_m = std::max(0.01, options.neighbour_cell_m);
   m.points.reserve(points.size());
   for (const Point2& p : points) {

@@ -11,6 +11,7 @@
 // bounds the level-0 score of every translation in a 2^h-cell block.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -24,6 +25,8 @@
 #include "core/viewpoint/orientation.h"
 
 namespace lmd {
+
+inline constexpr int kMaxPyramidLevels = 12;  // PreparedMapOptions::levels is clamped to it
 
 struct PreparedMapOptions {
   // m, finest correlative grid cell = search resolution; ICP refines below
@@ -112,13 +115,15 @@ struct PreparedMap {
   struct LazyPyramid {
     std::mutex mutex;             // held while a level is built
     std::atomic<int> built{0};    // levels [0, built) are complete
-    std::vector<LikelihoodLevel> levels;  // capacity reserved before the first: references stay valid
+    // Fixed storage: a level is read without the lock once `built` says it
+    // is complete, while the levels above it are being built.
+    std::array<LikelihoodLevel, kMaxPyramidLevels> levels;
   };
   std::shared_ptr<LazyPyramid> pyramid_ = std::make_shared<LazyPyramid>();
 };
 
 // Builds the buckets, normals and heading of `map`'s points (and its free
-// space, from its scans); the pyramid follows on first use (levels()). Cost
+// space, from its scans); the pyramid follows on first use (level()). Cost
 // is linear in the point count plus the grid area plus the beams (~2-10 ms
 // for a real local map, about half of it the pyramid).
 // Points that are not finite are dropped. Options out of range are clamped
