@@ -13,11 +13,11 @@
 #include "server/config.h"
 #include "core/change/change_detector.h"
 #include "core/localize/localizer.h"
+#include "core/localize/prepared_map_cache.h"
 #include "server/cluster/cluster_node.h"
 #include "server/cluster/forwarder.h"
 #include "server/descriptor_cache.h"
 #include "server/map_store.h"
-#include "server/prepared_maps.h"
 #include "server/recent_fixes.h"
 
 namespace lmd::server {

@@ -36,7 +36,7 @@ class CallMetrics {
   // Percentiles are bucket upper bounds: within 10 % of the true value.
   std::vector<v1::MethodStats> Snapshot() const;
 
-  // What the cache of prepared maps did (server/prepared_maps.h).
+  // What the cache of prepared maps did (core/localize/prepared_map_cache.h).
   struct PreparedCache {
     uint64_t misses = 0;  // maps prepared on a hit since start
     uint64_t bytes = 0;   // bytes held now

@@ -10,9 +10,9 @@
 #include <unordered_set>
 
 #include "core/localize/map_source.h"
+#include "core/localize/prepared_map_cache.h"
 #include "server/indexing.h"
 #include "server/map_store.h"
-#include "server/prepared_maps.h"
 
 namespace lmd::server {
 

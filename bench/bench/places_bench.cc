@@ -18,7 +18,7 @@
 //      noise, 10 % of the points dropped), taken as lmdd takes a query, run
 //      through PrepareLocalQuery and Localize with default LocalizeOptions
 //      against a MapSource that answers Search from the PlaceIndex and
-//      Prepared() from an LRU cache of M MiB of PreparedMaps (empty at the
+//      Prepared() from lmdd's PreparedMapCache of M MiB (empty at the
 //      start, as lmdd's after a restart), preparing a missing map on demand
 //      as lmdd does (PrepareMap with free space, heading from the stored
 //      features; a map the fit ranking reads alone is gridded alone,
@@ -48,13 +48,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <list>
 #include <memory>
 #include <mutex>
 #include <random>
 #include <string>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include "bench/bench/reobserve.h"
@@ -63,6 +61,7 @@
 #include "core/eval/retrieval_metrics.h"
 #include "core/localize/localizer.h"
 #include "core/localize/map_source.h"
+#include "core/localize/prepared_map_cache.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
 #include "core/place/place_features.h"
@@ -266,18 +265,15 @@ struct PrepareTally {
 thread_local PrepareTally tally;
 
 // The stored maps as a MapSource, as lmdd's StoreMapSource serves its store:
-// Search from the place index; Prepared() and SearchGrid() from an LRU cache
-// of prepared maps bounded in bytes (server/prepared_maps.h's policy: an
-// entry larger than the budget is not kept; least recent dropped first; a
-// grid alone replaced by the complete map), a miss prepared (or gridded)
-// from the compact map with the stored features' heading; RouteOf = (0, map
-// number).
+// Search from the place index; Prepared() and SearchGrid() from lmdd's
+// PreparedMapCache, a miss prepared (or gridded) from the compact map with
+// the stored features' heading; RouteOf = (0, map number).
 // Search, Prepared and RouteOf may run concurrently once the maps are added;
 // two queries that miss the same map both prepare it (as with lmdd's cache).
 class SimulatedStore : public MapSource {
  public:
   explicit SimulatedStore(size_t cache_bytes, PreparedMapOptions prepare)
-      : cache_bytes_(cache_bytes), prepare_(std::move(prepare)) {}
+      : cache_(cache_bytes), prepare_(std::move(prepare)) {}
 
   // Not thread-safe; ids are 0, 1, 2, ... in order.
   Status Add(PlaceFeatures features, CompactMap map) {
@@ -296,24 +292,24 @@ class SimulatedStore : public MapSource {
 
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override {
     if (map_id >= maps_.size()) return nullptr;
-    const std::shared_ptr<const PreparedMap> cached = Find(map_id);
+    const std::shared_ptr<const PreparedMap> cached = cache_.Find(kCollection, map_id);
     if (cached && !cached->SearchGridOnly()) return cached;
     const double c0 = ThreadCpuMs();
     const LocalMap map = maps_[map_id].Expand();
     auto prepared = std::make_shared<const PreparedMap>(
         cached ? CompletePreparation(*cached, map, index_.Heading(map_id)) : PrepareMap(map, prepare_, index_.Heading(map_id)));
     Tally(c0, false);
-    Put(map_id, prepared);
+    cache_.Put(kCollection, map_id, prepared);
     return prepared;
   }
 
   std::shared_ptr<const PreparedMap> SearchGrid(uint64_t map_id) const override {
     if (map_id >= maps_.size()) return nullptr;
-    if (std::shared_ptr<const PreparedMap> cached = Find(map_id)) return cached;
+    if (std::shared_ptr<const PreparedMap> cached = cache_.Find(kCollection, map_id)) return cached;
     const double c0 = ThreadCpuMs();
     auto grid = std::make_shared<const PreparedMap>(PrepareSearchGrid(maps_[map_id].Expand().points, prepare_));
     Tally(c0, true);
-    Put(map_id, grid);
+    cache_.Put(kCollection, map_id, grid);
     return grid;
   }
 
@@ -327,18 +323,7 @@ class SimulatedStore : public MapSource {
   const CompactMap& map(size_t id) const { return maps_[id]; }
   size_t size() const { return maps_.size(); }
   size_t preparations() const { return preparations_.load(); }
-  size_t evictions() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return evictions_;
-  }
-  size_t cached_bytes() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return cached_bytes_;
-  }
-  size_t cached_maps() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return where_.size();
-  }
+  const PreparedMapCache& cache() const { return cache_; }
   size_t MapBytes() const {
     size_t bytes = maps_.capacity() * sizeof(CompactMap);
     for (const CompactMap& m : maps_) bytes += m.MemoryBytes() - sizeof(CompactMap);
@@ -346,13 +331,7 @@ class SimulatedStore : public MapSource {
   }
 
  private:
-  std::shared_ptr<const PreparedMap> Find(uint64_t map_id) const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const auto it = where_.find(map_id);
-    if (it == where_.end()) return nullptr;
-    lru_.splice(lru_.begin(), lru_, it->second);
-    return it->second->second;
-  }
+  static inline const std::string kCollection = "sim";
 
   void Tally(double cpu_start_ms, bool grid_only) const {
     tally.cpu_ms += ThreadCpuMs() - cpu_start_ms;
@@ -361,40 +340,11 @@ class SimulatedStore : public MapSource {
     preparations_.fetch_add(1);
   }
 
-  // Adds, or completes a search grid held (as PreparedMapCache::Put does).
-  void Put(uint64_t map_id, std::shared_ptr<const PreparedMap> prepared) const {
-    const size_t size = prepared->MemoryBytes();
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (cache_bytes_ == 0 || size > cache_bytes_) return;
-    const auto it = where_.find(map_id);
-    if (it != where_.end()) {
-      if (!it->second->second->SearchGridOnly() || prepared->SearchGridOnly()) return;
-      cached_bytes_ -= it->second->second->MemoryBytes();
-      lru_.erase(it->second);
-      where_.erase(it);
-    }
-    lru_.emplace_front(map_id, std::move(prepared));
-    where_[map_id] = lru_.begin();
-    cached_bytes_ += size;
-    while (cached_bytes_ > cache_bytes_) {
-      cached_bytes_ -= lru_.back().second->MemoryBytes();
-      where_.erase(lru_.back().first);
-      lru_.pop_back();
-      ++evictions_;
-    }
-  }
-
   PlaceIndex index_;
   std::vector<CompactMap> maps_;
-  const size_t cache_bytes_;
+  mutable PreparedMapCache cache_;
   const PreparedMapOptions prepare_;
   mutable std::atomic<size_t> preparations_{0};
-  mutable std::mutex mutex_;
-  // Guarded by mutex_: most recent first.
-  mutable std::list<std::pair<uint64_t, std::shared_ptr<const PreparedMap>>> lru_;
-  mutable std::unordered_map<uint64_t, decltype(lru_)::iterator> where_;
-  mutable size_t cached_bytes_ = 0;
-  mutable size_t evictions_ = 0;
 };
 
 bool SameFeatures(const PlaceFeatures& a, const PlaceFeatures& b) {
@@ -723,8 +673,9 @@ int RunPlacesBench(int argc, char** argv) {
               results.size());
   std::printf("  first stage (p50)       %.0f stored features compared, %.0f maps voted; %.0f maps matched\n",
               Quantile(candidates, 0.5), Quantile(maps_voted, 0.5), Quantile(matched, 0.5));
-  std::printf("  prepared-map cache      %zu maps, %.1f MiB, %zu evictions\n", store.cached_maps(),
-              static_cast<double>(store.cached_bytes()) / (1 << 20), store.evictions());
+  std::printf("  prepared-map cache      %zu maps, %.1f MiB, %llu evictions\n", store.cache().size(),
+              static_cast<double>(store.cache().bytes()) / (1 << 20),
+              static_cast<unsigned long long>(store.cache().evictions()));
   std::printf("  answers                 source among hypotheses %.2f, top hit = source %.2f, "
               "top hit shows the place %.2f, a hit shows it %.2f\n",
               share(&QueryResult::source_in_hypotheses), share(&QueryResult::top_is_source),
@@ -757,7 +708,7 @@ int RunPlacesBench(int argc, char** argv) {
         static_cast<double>(index_bytes) / nm, static_cast<double>(map_bytes) / nm, Quantile(query_cpu, 0.5),
         Quantile(search_cpu, 0.5), Quantile(search_cpu, 0.99), Quantile(cold_cpu, 0.5), Quantile(cold_cpu, 0.99),
         Quantile(warm_cpu, 0.5), Quantile(warm_cpu, 0.99), Quantile(prep_cpu, 0.5), preparations, grid_preparations,
-        per_prep_ms, Quantile(candidates, 0.5), Quantile(matched, 0.5), store.evictions(),
+        per_prep_ms, Quantile(candidates, 0.5), Quantile(matched, 0.5), static_cast<size_t>(store.cache().evictions()),
         share(&QueryResult::source_in_hypotheses), share(&QueryResult::top_is_source),
         share(&QueryResult::top_shows_place), sure_share, right_share, MaxRssMb());
   }

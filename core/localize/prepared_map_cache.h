@@ -2,12 +2,12 @@
 // pyramids, buckets, free space: ~100-200 KB each, 1-5 ms to build), or
 // gridded alone for a coarse fit (PreparedMap::SearchGridOnly, completed and
 // replaced when matched against), kept in memory up to a byte budget, least
-// recently used dropped first. Keyed by
-// collection and the map's index id, which changes whenever a map is
-// replaced, so an entry is never stale. A map is put here when it is
-// inserted (prepared anyway, with its place features) and found again when
-// it is a hit; after a restart or an eviction it is prepared on first use.
-// Thread-safe.
+// recently used dropped first. Keyed by collection and the map's index id,
+// which lmdd changes whenever a map is replaced, so an entry is never stale.
+// lmdd (server/store_map_source.h) puts a map here when it is inserted
+// (prepared anyway, with its place features) and finds it again when it is
+// a hit; after a restart or an eviction it is prepared on first use.
+// lmd-bench places serves its simulated store through it too. Thread-safe.
 #pragma once
 
 #include <atomic>
@@ -20,7 +20,7 @@
 
 #include "core/align/prepared_map.h"
 
-namespace lmd::server {
+namespace lmd {
 
 class PreparedMapCache {
  public:
@@ -33,8 +33,10 @@ class PreparedMapCache {
   void Put(const std::string& collection, uint64_t index_id, std::shared_ptr<const PreparedMap> prepared);
 
   size_t bytes() const;
-  // Find calls that found nothing, since start.
+  size_t size() const;  // maps held
+  // Find calls that found nothing, and maps dropped for the budget, since start.
   uint64_t misses() const { return misses_; }
+  uint64_t evictions() const { return evictions_; }
 
  private:
   static std::string KeyOf(const std::string& collection, uint64_t index_id) {
@@ -43,6 +45,7 @@ class PreparedMapCache {
 
   const size_t capacity_bytes_;
   std::atomic<uint64_t> misses_{0};
+  std::atomic<uint64_t> evictions_{0};
   mutable std::mutex mutex_;
   size_t bytes_ = 0;  // guarded by mutex_
   // Guarded by mutex_: most recent first.
@@ -50,4 +53,4 @@ class PreparedMapCache {
   std::unordered_map<std::string, decltype(entries_)::iterator> index_;
 };
 
-}  // namespace lmd::server
+}  // namespace lmd

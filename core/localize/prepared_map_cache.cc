@@ -1,10 +1,15 @@
-#include "server/prepared_maps.h"
+#include "core/localize/prepared_map_cache.h"
 
-namespace lmd::server {
+namespace lmd {
 
 size_t PreparedMapCache::bytes() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return bytes_;
+}
+
+size_t PreparedMapCache::size() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return index_.size();
 }
 
 std::shared_ptr<const PreparedMap> PreparedMapCache::Find(const std::string& collection, uint64_t index_id) {
@@ -40,7 +45,8 @@ void PreparedMapCache::Put(const std::string& collection, uint64_t index_id,
     bytes_ -= entries_.back().second->MemoryBytes();
     index_.erase(entries_.back().first);
     entries_.pop_back();
+    ++evictions_;
   }
 }
 
-}  // namespace lmd::server
+}  // namespace lmd

@@ -1,11 +1,11 @@
-#include "server/prepared_maps.h"
+#include "core/localize/prepared_map_cache.h"
 
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <vector>
 
-namespace lmd::server {
+namespace lmd {
 namespace {
 
 std::vector<Point2> Wall() {
@@ -37,5 +37,24 @@ TEST(PreparedMapCacheTest, ACompletedSearchGridReplacesItsGridAndNeverTheReverse
   EXPECT_EQ(cache.Find("c", 1), complete);  // a complete map is kept as it is
 }
 
+// The least recently used map goes first once the budget is spent, and is
+// counted.
+TEST(PreparedMapCacheTest, DropsTheLeastRecentBeyondItsBudget) {
+  const auto map = [] { return std::make_shared<const PreparedMap>(PreparePoints(Wall())); };
+  const size_t each = map()->MemoryBytes();
+  PreparedMapCache cache(2 * each + each / 2);
+  cache.Put("c", 1, map());
+  cache.Put("c", 2, map());
+  ASSERT_NE(cache.Find("c", 1), nullptr);  // 1 is now the most recent
+  cache.Put("c", 3, map());
+  EXPECT_EQ(cache.size(), 2u);
+  EXPECT_EQ(cache.evictions(), 1u);
+  EXPECT_EQ(cache.bytes(), 2 * each);
+  EXPECT_NE(cache.Find("c", 1), nullptr);
+  EXPECT_EQ(cache.Find("c", 2), nullptr);
+  EXPECT_NE(cache.Find("c", 3), nullptr);
+  EXPECT_EQ(cache.Find("other", 1), nullptr);  // keyed by collection too
+}
+
 }  // namespace
-}  // namespace lmd::server
+}  // namespace lmd
