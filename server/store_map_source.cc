@@ -11,31 +11,20 @@ std::vector<PlaceHypothesis> StoreMapSource::Search(const PlaceFeatures& query, 
   return found.ok() ? std::move(found).value() : std::vector<PlaceHypothesis>{};
 }
 
-std::shared_ptr<const PreparedMap> StoreMapSource::Prepared(uint64_t map_id) const {
-  std::shared_ptr<const PreparedMap> cached = cache_->Find(collection_, map_id);
-  if (cached && !cached->SearchGridOnly()) return cached;
+std::optional<PreparedMapCache::Source> StoreMapSource::Read(uint64_t map_id) const {
   Result<IndexedEntry> entry = store_->Indexed(collection_, map_id);
-  if (!entry.ok()) return nullptr;
+  if (!entry.ok()) return std::nullopt;
   Result<v1::StoredMap> stored = store_->GetMap(collection_, entry->map_id);
-  if (!stored.ok()) return nullptr;  // deleted meanwhile
-  const LocalMap map = MethodView(FromProto(stored->map()));
-  const PreparedMapOptions& options = store_->indexing().localize.match.map;
-  auto prepared = std::make_shared<const PreparedMap>(
-      cached ? CompletePreparation(*cached, map, entry->heading) : PrepareMap(map, options, entry->heading));
-  cache_->Put(collection_, map_id, prepared);
-  return prepared;
+  if (!stored.ok()) return std::nullopt;  // deleted meanwhile
+  return PreparedMapCache::Source{MethodView(FromProto(stored->map())), entry->heading};
+}
+
+std::shared_ptr<const PreparedMap> StoreMapSource::Prepared(uint64_t map_id) const {
+  return cache_->Prepared(collection_, map_id, store_->indexing().localize.match.map, [&] { return Read(map_id); });
 }
 
 std::shared_ptr<const PreparedMap> StoreMapSource::SearchGrid(uint64_t map_id) const {
-  if (std::shared_ptr<const PreparedMap> cached = cache_->Find(collection_, map_id)) return cached;
-  Result<IndexedEntry> entry = store_->Indexed(collection_, map_id);
-  if (!entry.ok()) return nullptr;
-  Result<v1::StoredMap> stored = store_->GetMap(collection_, entry->map_id);
-  if (!stored.ok()) return nullptr;  // deleted meanwhile
-  auto grid = std::make_shared<const PreparedMap>(
-      PrepareSearchGrid(MethodView(FromProto(stored->map())).points, store_->indexing().localize.match.map));
-  cache_->Put(collection_, map_id, grid);
-  return grid;
+  return cache_->SearchGrid(collection_, map_id, store_->indexing().localize.match.map, [&] { return Read(map_id); });
 }
 
 bool StoreMapSource::RouteOf(uint64_t map_id, Route* route) const {

@@ -6,6 +6,7 @@
 // query: it carries the request's excluded map ids.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <unordered_set>
 
@@ -39,6 +40,9 @@ class StoreMapSource : public MapSource {
                                         const std::function<bool(uint64_t)>& excluded) const override;
 
  private:
+  // The stored map and its heading, for the cache's misses.
+  std::optional<PreparedMapCache::Source> Read(uint64_t map_id) const;
+
   const MapStore* const store_;
   PreparedMapCache* const cache_;
   const std::string collection_;

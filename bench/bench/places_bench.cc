@@ -50,6 +50,7 @@
 #include <cstdlib>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -292,25 +293,16 @@ class SimulatedStore : public MapSource {
 
   std::shared_ptr<const PreparedMap> Prepared(uint64_t map_id) const override {
     if (map_id >= maps_.size()) return nullptr;
-    const std::shared_ptr<const PreparedMap> cached = cache_.Find(kCollection, map_id);
-    if (cached && !cached->SearchGridOnly()) return cached;
-    const double c0 = ThreadCpuMs();
-    const LocalMap map = maps_[map_id].Expand();
-    auto prepared = std::make_shared<const PreparedMap>(
-        cached ? CompletePreparation(*cached, map, index_.Heading(map_id)) : PrepareMap(map, prepare_, index_.Heading(map_id)));
-    Tally(c0, false);
-    cache_.Put(kCollection, map_id, prepared);
-    return prepared;
+    return Tallied(false, [&](const PreparedMapCache::ReadSource& read) {
+      return cache_.Prepared(kCollection, map_id, prepare_, read);
+    }, map_id);
   }
 
   std::shared_ptr<const PreparedMap> SearchGrid(uint64_t map_id) const override {
     if (map_id >= maps_.size()) return nullptr;
-    if (std::shared_ptr<const PreparedMap> cached = cache_.Find(kCollection, map_id)) return cached;
-    const double c0 = ThreadCpuMs();
-    auto grid = std::make_shared<const PreparedMap>(PrepareSearchGrid(maps_[map_id].Expand().points, prepare_));
-    Tally(c0, true);
-    cache_.Put(kCollection, map_id, grid);
-    return grid;
+    return Tallied(true, [&](const PreparedMapCache::ReadSource& read) {
+      return cache_.SearchGrid(kCollection, map_id, prepare_, read);
+    }, map_id);
   }
 
   bool RouteOf(uint64_t map_id, Route* route) const override {
@@ -333,11 +325,23 @@ class SimulatedStore : public MapSource {
  private:
   static inline const std::string kCollection = "sim";
 
-  void Tally(double cpu_start_ms, bool grid_only) const {
-    tally.cpu_ms += ThreadCpuMs() - cpu_start_ms;
-    ++tally.count;
-    tally.grids += grid_only;
-    preparations_.fetch_add(1);
+  // `lookup` (a cache call) given the reader of map_id; its CPU is tallied
+  // when it missed (read the map and prepared it).
+  template <typename Lookup>
+  std::shared_ptr<const PreparedMap> Tallied(bool grid_only, const Lookup& lookup, uint64_t map_id) const {
+    bool missed = false;
+    const double c0 = ThreadCpuMs();
+    std::shared_ptr<const PreparedMap> prepared = lookup([&]() -> std::optional<PreparedMapCache::Source> {
+      missed = true;
+      return PreparedMapCache::Source{maps_[map_id].Expand(), index_.Heading(map_id)};
+    });
+    if (missed) {
+      tally.cpu_ms += ThreadCpuMs() - c0;
+      ++tally.count;
+      tally.grids += grid_only;
+      preparations_.fetch_add(1);
+    }
+    return prepared;
   }
 
   PlaceIndex index_;

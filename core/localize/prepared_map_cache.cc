@@ -12,6 +12,30 @@ size_t PreparedMapCache::size() const {
   return index_.size();
 }
 
+std::shared_ptr<const PreparedMap> PreparedMapCache::Prepared(const std::string& collection, uint64_t index_id,
+                                                              const PreparedMapOptions& options,
+                                                              const ReadSource& read) {
+  const std::shared_ptr<const PreparedMap> held = Find(collection, index_id);
+  if (held && !held->SearchGridOnly()) return held;
+  const std::optional<Source> source = read();
+  if (!source) return nullptr;
+  auto prepared = std::make_shared<const PreparedMap>(held ? CompletePreparation(*held, source->map, source->heading)
+                                                           : PrepareMap(source->map, options, source->heading));
+  Put(collection, index_id, prepared);
+  return prepared;
+}
+
+std::shared_ptr<const PreparedMap> PreparedMapCache::SearchGrid(const std::string& collection, uint64_t index_id,
+                                                                const PreparedMapOptions& options,
+                                                                const ReadSource& read) {
+  if (std::shared_ptr<const PreparedMap> held = Find(collection, index_id)) return held;
+  const std::optional<Source> source = read();
+  if (!source) return nullptr;
+  auto grid = std::make_shared<const PreparedMap>(PrepareSearchGrid(source->map.points, options));
+  Put(collection, index_id, grid);
+  return grid;
+}
+
 std::shared_ptr<const PreparedMap> PreparedMapCache::Find(const std::string& collection, uint64_t index_id) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = index_.find(KeyOf(collection, index_id));

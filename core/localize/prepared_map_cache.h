@@ -12,9 +12,11 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -25,6 +27,24 @@ namespace lmd {
 class PreparedMapCache {
  public:
   explicit PreparedMapCache(size_t capacity_bytes) : capacity_bytes_(capacity_bytes) {}
+
+  // What a miss prepares from: the stored map and its compass heading.
+  struct Source {
+    LocalMap map;
+    std::optional<double> heading;
+  };
+  // Reads the stored map on a miss; nullopt when it is no longer stored.
+  using ReadSource = std::function<std::optional<Source>()>;
+
+  // The map prepared for scan matching (PrepareMap): the one held, or
+  // `read`'s prepared (a search grid held completed) and added. Null when
+  // `read` finds nothing.
+  std::shared_ptr<const PreparedMap> Prepared(const std::string& collection, uint64_t index_id,
+                                              const PreparedMapOptions& options, const ReadSource& read);
+  // At least its search grid (MapSource::SearchGrid): whatever is held, or
+  // `read`'s points gridded (PrepareSearchGrid) and added.
+  std::shared_ptr<const PreparedMap> SearchGrid(const std::string& collection, uint64_t index_id,
+                                                const PreparedMapOptions& options, const ReadSource& read);
 
   // Null when absent.
   std::shared_ptr<const PreparedMap> Find(const std::string& collection, uint64_t index_id);

@@ -56,5 +56,39 @@ TEST(PreparedMapCacheTest, DropsTheLeastRecentBeyondItsBudget) {
   EXPECT_EQ(cache.Find("other", 1), nullptr);  // keyed by collection too
 }
 
+// A map gridded for a coarse fit is read once more when it is matched
+// against, and completed sharing the grid's pyramid; from then on neither
+// call reads it. A map no longer stored gives null and leaves nothing held.
+TEST(PreparedMapCacheTest, AGridIsCompletedOnceWhenAMatchNeedsTheWholeMap) {
+  int reads = 0;
+  const PreparedMapCache::ReadSource read = [&]() -> std::optional<PreparedMapCache::Source> {
+    ++reads;
+    LocalMap map;
+    map.points = Wall();
+    return PreparedMapCache::Source{map, 0.0};
+  };
+  PreparedMapCache cache(1 << 30);
+  const PreparedMapOptions options;
+  const auto grid = cache.SearchGrid("c", 1, options, read);
+  ASSERT_NE(grid, nullptr);
+  EXPECT_TRUE(grid->SearchGridOnly());
+  EXPECT_EQ(reads, 1);
+  const LikelihoodLevel* base = &grid->level(0);
+  const auto complete = cache.Prepared("c", 1, options, read);
+  ASSERT_NE(complete, nullptr);
+  EXPECT_FALSE(complete->SearchGridOnly());
+  EXPECT_EQ(&complete->level(0), base);
+  EXPECT_EQ(reads, 2);
+  EXPECT_EQ(cache.Prepared("c", 1, options, read), complete);
+  EXPECT_EQ(cache.SearchGrid("c", 1, options, read), complete);
+  EXPECT_EQ(reads, 2);
+  EXPECT_EQ(cache.size(), 1u);
+
+  const PreparedMapCache::ReadSource gone = [] { return std::optional<PreparedMapCache::Source>(); };
+  EXPECT_EQ(cache.Prepared("c", 2, options, gone), nullptr);
+  EXPECT_EQ(cache.SearchGrid("c", 2, options, gone), nullptr);
+  EXPECT_EQ(cache.size(), 1u);
+}
+
 }  // namespace
 }  // namespace lmd
