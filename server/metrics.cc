@@ -76,6 +76,13 @@ void CallMetrics::RecordQueryWork(uint64_t features_compared, uint64_t maps_matc
   work_.reduced_depth += reduced_depth;
 }
 
+void CallMetrics::RecordAnswer(const Verdict& verdict) {
+  const char* asked = verdict.sequence_maps > 0 ? "sequence" : verdict.prior_used ? "prior" : "global";
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++answers_[{asked, verdict.sure ? "sure" : "unsure"}];
+  priors_failed_ += verdict.prior_failed;
+}
+
 void CallMetrics::RecordEvicted(uint64_t maps) {
   if (maps == 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
@@ -127,6 +134,13 @@ std::string CallMetrics::PrometheusText(const std::vector<v1::CollectionInfo>& c
           maps_evicted_);
   counter("lmd_queries_reduced_depth_total", "Queries answered at the busy depth because calls were waiting.",
           work_.reduced_depth);
+  out << "# HELP lmd_answers_total Default-method queries answered, by what was asked (a prior, a sequence, "
+         "or neither) and whether lmdd was sure.\n# TYPE lmd_answers_total counter\n";
+  for (const auto& [key, count] : answers_) {
+    out << "lmd_answers_total{asked=\"" << key.first << "\",verdict=\"" << key.second << "\"} " << count << "\n";
+  }
+  counter("lmd_priors_failed_total", "Prior queries that no map near the prior matched (answered globally on request).",
+          priors_failed_);
   counter("lmd_maps_prepared_total", "Hits prepared for scan matching (misses of the prepared-map cache).",
           prepared.misses);
   out << "# HELP lmd_prepared_cache_bytes Bytes held by the prepared-map cache (prepared_map_cache_mb).\n"

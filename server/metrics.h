@@ -8,8 +8,10 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/localize/confidence.h"
 #include "lmd/v1/lmd.pb.h"
 
 namespace lmd::server {
@@ -28,6 +30,14 @@ class CallMetrics {
   // Exported as Prometheus counters, so that an operator sees what
   // verify_candidates costs and how often load reduced it.
   void RecordQueryWork(uint64_t features_compared, uint64_t maps_matched, bool reduced_depth);
+
+  // Records how a default-method query was answered: what the robot asked
+  // (a prior, a sequence, or neither: global) and whether lmdd was sure; and
+  // a prior that no map near it matched, whatever followed (a global answer
+  // on request). Exported as lmd_answers_total{asked, verdict} and
+  // lmd_priors_failed_total: a fleet's share of sure answers, and how often
+  // its robots' priors are wrong, are its health.
+  void RecordAnswer(const Verdict& verdict);
 
   // Records maps deleted to keep a collection within its cap.
   void RecordEvicted(uint64_t maps);
@@ -70,6 +80,9 @@ class CallMetrics {
   mutable std::mutex mutex_;
   std::map<std::string, Method> methods_;  // guarded by mutex_
   QueryWork work_;                         // guarded by mutex_
+  // Answers by what was asked (global, prior, sequence) and verdict (sure, unsure).
+  std::map<std::pair<std::string, std::string>, uint64_t> answers_;  // guarded by mutex_
+  uint64_t priors_failed_ = 0;                                        // guarded by mutex_
   uint64_t maps_evicted_ = 0;              // guarded by mutex_
 };
 

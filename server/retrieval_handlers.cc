@@ -219,6 +219,7 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       fixes_.Put(collection, key, fix);
     }
     metrics_->RecordQueryWork(l.stats.search.candidates, l.stats.maps_matched, query.reduced_depth);
+    metrics_->RecordAnswer(l.verdict);
     return query;
   }
   const std::unordered_set<std::string> excluded(request.exclude->begin(), request.exclude->end());

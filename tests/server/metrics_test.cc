@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/metrics.h"
 #include "tests/server/test_server.h"
 
 namespace lmd::testing {
@@ -118,6 +119,33 @@ TEST_F(PrometheusTest, CountsTheWorkOfQueries) {
   EXPECT_EQ(CounterValue(page, "lmd_maps_prepared_total"), 0) << page;
   EXPECT_GT(CounterValue(page, "lmd_prepared_cache_bytes"), 0) << page;
   EXPECT_GT(CounterValue(page, "process_cpu_seconds_total"), -1) << page;
+  // Both answered globally, with the verdict the robot got.
+  const std::string verdict = response.localization().localized() ? "sure" : "unsure";
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"global\",verdict=\"" + verdict + "\"}"), 2) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_priors_failed_total"), 0) << page;
+}
+
+// Answers are counted by what the robot asked and the verdict; a prior that
+// matched nothing counts as failed, also when a global query answered.
+TEST(MetricsTest, AnswersAreCountedByWhatWasAskedAndTheVerdict) {
+  server::CallMetrics metrics;
+  Verdict sure_global;
+  sure_global.sure = true;
+  Verdict unsure_prior;
+  unsure_prior.prior_used = true;
+  Verdict fell_back = unsure_prior;
+  fell_back.prior_failed = fell_back.fell_back_to_global = true;
+  fell_back.sure = true;
+  Verdict sequence;
+  sequence.sequence_maps = 2;
+  for (const Verdict* v : {&sure_global, &sure_global, &unsure_prior, &fell_back, &sequence}) metrics.RecordAnswer(*v);
+  const std::string page = metrics.PrometheusText({}, 1.0, {}, 0.0);
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"global\",verdict=\"sure\"}"), 2) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"prior\",verdict=\"unsure\"}"), 1) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"prior\",verdict=\"sure\"}"), 1) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"sequence\",verdict=\"unsure\"}"), 1) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_answers_total{asked=\"global\",verdict=\"unsure\"}"), -1) << page;
+  EXPECT_EQ(CounterValue(page, "lmd_priors_failed_total"), 1) << page;
 }
 
 }  // namespace
