@@ -23,6 +23,16 @@ double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_i
   return std::max(FreeSpaceShare(b.sparse_points, a, b_in_a), FreeSpaceShare(a.sparse_points, b, Inverse(b_in_a)));
 }
 
+double HighestHarmlessRival(double best_score, const ConfidenceOptions& options) {
+  double margin = options.min_margin;
+  if (options.min_confidence >= 1.0) return -1.0;
+  if (options.min_confidence > 0.0) {  // the margin at which the confidence reaches min_confidence
+    const double logit = std::log(options.min_confidence / (1.0 - options.min_confidence));
+    margin = std::max(margin, (logit - options.bias - options.score_weight * best_score) / options.margin_weight);
+  }
+  return best_score - margin;
+}
+
 Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, double self_rival) {
   Verdict v;
   v.rival_score = self_rival;

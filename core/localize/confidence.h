@@ -83,7 +83,10 @@ struct Verdict {
   bool sure = false;
   double confidence = 0.0;   // estimated probability that the best hit is right
   double best_score = 0.0;
-  double rival_score = 0.0;  // best disagreeing hit's score, or the best map's at another pose (0 if none)
+  // Best disagreeing hit's score, or the best map's at another pose (0 if
+  // none, or if that pose was not looked for: Localize searches only for
+  // one that could change the verdict).
+  double rival_score = 0.0;
   size_t agreeing = 0;       // other hits that agree with the best
   // Anchored hits: how far the median pose of the other agreeing maps that
   // fit lies from the best hit's (0: fewer than two of them).
@@ -119,6 +122,12 @@ struct JudgedHit {
 // agrees with itself). `self_rival`: the score of the best hit's map at
 // another pose (a rival whatever the maps say; 0: none).
 Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {}, double self_rival = 0.0);
+
+// The highest rival score that leaves a best hit scoring `best_score` sure
+// by the margin (min_margin) and the calibrated confidence (min_confidence)
+// Judge asks for: a rival scoring no more cannot change the verdict.
+// Negative when no margin makes it sure.
+double HighestHarmlessRival(double best_score, const ConfidenceOptions& options);
 
 // Largest share of either map's observed points in the other's free space
 // under the relative pose `b_in_a` (hit B's own frame in hit A's own frame).

@@ -196,6 +196,27 @@ ConfidenceOptions ThresholdsOnly() {
   return options;
 }
 
+// A rival at the highest harmless score leaves the answer sure, one just
+// above it does not: with the margin alone, and with the confidence's own
+// threshold (which asks for more where the best score is lower).
+TEST(JudgeTest, TheHighestHarmlessRivalIsWhereTheVerdictTurns) {
+  for (const ConfidenceOptions& options : {ConfidenceOptions{}, ThresholdsOnly()}) {
+    for (double best : {0.65, 0.75, 0.85, 0.95}) {
+      const double harmless = HighestHarmlessRival(best, options);
+      ASSERT_GT(harmless, 0.0) << best;
+      EXPECT_LE(harmless, best - options.min_margin + 1e-12) << best;
+      std::vector<JudgedHit> hits = {{best, kQueryPose, &TheMaps().room, false, std::nullopt}};
+      EXPECT_TRUE(Judge(&hits, options, harmless - 1e-9).sure) << best;
+      EXPECT_FALSE(Judge(&hits, options, harmless + 1e-3).sure) << best;
+    }
+  }
+  // The confidence asks for more than the margin below a best score of about 0.96.
+  EXPECT_LT(HighestHarmlessRival(0.65, ConfidenceOptions{}), HighestHarmlessRival(0.65, ThresholdsOnly()) - 0.1);
+  ConfidenceOptions never;
+  never.min_confidence = 1.0;
+  EXPECT_LT(HighestHarmlessRival(0.9, never), 0.0);
+}
+
 TEST(JudgeTest, ADisagreeingHitBeyondTheMarginLeavesItSure) {
   const Maps& m = TheMaps();
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &m.room, false, std::nullopt}, {0.65, kQueryPose, &m.partitioned, false, std::nullopt}};
