@@ -153,6 +153,29 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   out->hits = std::move(hits);
 }
 
+namespace {
+
+// A match of the best map at another pose ends with a verification score
+// of at most 1 / kRivalSearchShare times its search score, so a search
+// score below kRivalSearchShare times the highest harmless rival cannot
+// make a rival that changes the verdict. Measured (lmd-eval retrieval
+// --methods best, 1,526 second poses): verification / search score at most
+// 1.31 (median 0.68); 0.75 is 1 / 1.33.
+constexpr double kRivalSearchShare = 0.75;
+
+}  // namespace
+
+double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
+                      const ConfidenceOptions& verdict) {
+  // The search's floor: its bound then prunes most of the map.
+  ScanMatchOptions match = options.match;
+  match.correlative.min_score =
+      std::max(match.correlative.min_score, kRivalSearchShare * HighestHarmlessRival(best.score, verdict));
+  const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
+                                           options.self_rival_angle_deg, match);
+  return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
+}
+
 std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const ConfidenceOptions& options) {
   if (hits.empty() || !hits[0].collection_pose) return std::nullopt;
   const Pose2& best = *hits[0].collection_pose;
@@ -397,18 +420,6 @@ LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const
   return q;
 }
 
-namespace {
-
-// A match of the best map at another pose ends with a verification score
-// of at most 1 / kRivalSearchShare times its search score, so a search
-// score below kRivalSearchShare times the highest harmless rival cannot
-// make a rival that changes the verdict. Measured (lmd-eval retrieval
-// --methods best, 1,526 second poses): verification / search score at most
-// 1.31 (median 0.68); 0.75 is 1 / 1.33.
-constexpr double kRivalSearchShare = 0.75;
-
-}  // namespace
-
 Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                       const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
                       bool with_changes) {
@@ -417,16 +428,7 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   SetCollectionPoses(source, &hits);
   std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
   if (options.self_rival_radius_m > 0) {
-    second_pose = [&](const LocalizedHit& best) {
-      // Poses whose search score cannot lead to a harmful rival are not
-      // searched (the search's floor): its bound then prunes most of the map.
-      ScanMatchOptions match = options.match;
-      match.correlative.min_score = std::max(
-          match.correlative.min_score, kRivalSearchShare * HighestHarmlessRival(best.score, options.confidence));
-      const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
-                                               options.self_rival_angle_deg, match);
-      return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
-    };
+    second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(query, best, options, options.confidence); };
   }
   Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
   return out;

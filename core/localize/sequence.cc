@@ -182,11 +182,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   // (the odometry moves them together), and only that shift tells.
   std::function<double(const LocalizedHit&)> second_pose;
   if (options.self_rival_radius_m > 0) {
-    second_pose = [&](const LocalizedHit& best) {
-      const ScanMatch second = SecondBestMatch(newest.match, *best.db, best.pose, options.self_rival_radius_m,
-                                               options.self_rival_angle_deg, options.match);
-      return second.score > 0 ? Scored(newest, *best.db, second, options).score : 0.0;
-    };
+    second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(newest, best, options, judged.confidence); };
   }
   Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out);
   out.verdict.sequence_maps = earlier.size();

@@ -29,6 +29,13 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 // The hit at `pose`, measured as verification measures (no search).
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options);
 
+// The verification score of the best hit's map at its best other pose
+// (beyond options.self_rival_radius_m / self_rival_angle_deg, anywhere in
+// the map): a self-rival for a sure answer judged by `verdict`. Poses that
+// could not score above HighestHarmlessRival are not searched for (0).
+double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
+                      const ConfidenceOptions& verdict);
+
 // The query's site pose as the maps that show its place measure it: each
 // agreeing anchored hit that fits (options.min_score; the best hit always)
 // is one measurement, through its own match and its own anchor. The mean of
