@@ -89,6 +89,10 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
     return SetNumber(key, value, [](double m) { return m > 0 && m <= 1150; }, "a number of metres in (0, 1150]",
                      &config->max_map_extent_m);
   }
+  if (key == "max_query_seconds") {
+    return SetNumber(key, value, [](double s) { return s >= 0 && s <= 86400; }, "a number of seconds in [0, 86400]",
+                     &config->max_query_seconds);
+  }
   if (key == "tls_cert_file") { config->tls_cert_file = value; return Status::Ok(); }
   if (key == "tls_key_file") { config->tls_key_file = value; return Status::Ok(); }
   if (key == "tls_client_ca_file") { config->tls_client_ca_file = value; return Status::Ok(); }

@@ -92,6 +92,12 @@ struct ServerConfig {
   // real logs). A request may ask for another number (verify_candidates, up
   // to max_verify_candidates). docs/results.md measures 20.
   uint32_t verify_candidates = 20;
+  // Longest a query (Retrieve, DetectChanges) may compute, s, whatever the
+  // client's deadline: one then ends with DEADLINE_EXCEEDED and frees its
+  // worker. Real local maps take milliseconds; an unstructured map the
+  // limits allow (thousands of points scattered over max_map_extent_m) kept a
+  // worker busy for minutes. 0: no bound but the client's deadline.
+  double max_query_seconds = 30.0;
   // Under load, queries trade depth for time. A Retrieve or DetectChanges of
   // the default method that starts while at least `busy_queued_calls` calls
   // wait for a worker scan matches `busy_verify_candidates` maps (if less than

@@ -116,13 +116,15 @@ class LmdServiceImpl final : public v1::LmdService::CallbackService {
   template <typename Request>
   static QueryRequest QueryOf(const Request& request, bool with_changes);
   // Maps whose id is in `exclude` are left out of the hits. Cancelled once
-  // `context` is (checked between scan matches).
+  // `context` is, DEADLINE_EXCEEDED past config max_query_seconds (both
+  // polled during scan matches).
   Result<Query> RunQuery(const QueryRequest& request, grpc::CallbackServerContext* context) const;
-  // The default method's answer to `request` (prior, sequence or global).
   // True when `map_id`'s anchor was given (a pose_hint), not derived by lmdd.
   bool AnchorIsGiven(const std::string& collection, const std::string& map_id) const;
+  // The default method's answer to `request` (prior, sequence or global),
+  // given up (an incomplete answer) once `stop` returns true.
   Result<Localization> Localise(const QueryRequest& request, const LocalQuery& query, const LocalizeOptions& options,
-                                grpc::CallbackServerContext* context) const;
+                                const std::function<bool()>& stop) const;
   // The wire form of a hit: of the default method, and of a paper method
   // (with the pose the planned viewpoints imply, except for BoW).
   v1::MapHit DefaultWireHit(const std::string& collection, const LocalizedHit& hit, const std::string& map_id,

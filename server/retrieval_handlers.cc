@@ -4,10 +4,13 @@
 // described its maps, ask the collection's LMD index, and (for changes) run
 // the paper's change detector against each hit's stored descriptor.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <unordered_map>
 #include <unordered_set>
+
+#include <spdlog/fmt/fmt.h>
 
 #include "core/align/relative_pose.h"
 #include "core/index/index.h"
@@ -92,10 +95,9 @@ bool LmdServiceImpl::AnchorIsGiven(const std::string& collection, const std::str
 
 Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const LocalQuery& query,
                                               const LocalizeOptions& options,
-                                              grpc::CallbackServerContext* context) const {
+                                              const std::function<bool()>& cancelled) const {
   const std::unordered_set<std::string> excluded(request.exclude->begin(), request.exclude->end());
   const StoreMapSource source(store_, &prepared_, *request.collection, excluded);
-  auto cancelled = [context] { return context->IsCancelled(); };
   if (request.prior != nullptr) {
     const v1::Prior& wire = *request.prior;
     Prior prior;
@@ -136,6 +138,12 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& request,
                                                        grpc::CallbackServerContext* context) const {
+  const auto give_up_at = std::chrono::steady_clock::now() + std::chrono::duration<double>(config_.max_query_seconds);
+  bool out_of_time = false;
+  auto stop = [&] {
+    out_of_time = out_of_time || (config_.max_query_seconds > 0 && std::chrono::steady_clock::now() >= give_up_at);
+    return out_of_time || context->IsCancelled();
+  };
   const std::string& collection = *request.collection;
   Status valid = ValidateCollectionName(collection);
   if (valid.ok()) valid = ValidateLocalMap(*request.map, config_, "query map");
@@ -195,9 +203,13 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
       query.reduced_depth = true;
     }
     const LocalQuery local = PrepareLocalQuery(MethodView(FromProto(*request.map)), options, &query.described->place);
-    Result<Localization> localization = Localise(request, local, options, context);
+    Result<Localization> localization = Localise(request, local, options, stop);
     if (!localization.ok()) return localization.status();
     query.localization = std::move(localization).value();
+    if (out_of_time) {
+      return Status::DeadlineExceeded("the query was given up after max_query_seconds (" +
+                                      fmt::format("{:g}", config_.max_query_seconds) + " s) of scan matching");
+    }
     if (context->IsCancelled()) return Status::Cancelled("call cancelled during verification");
     for (const LocalizedHit& hit : query.localization.hits) {
       Result<IndexedEntry> entry = store_->Indexed(collection, hit.map_id);

@@ -90,6 +90,7 @@ class BranchAndBound {
   void Search(int level, std::vector<Block>& candidates) {
     for (const Block& c : candidates) {
       if (c.score <= best_.score) break;  // sorted: nothing better below
+      if (Stopped()) return;
       if (Excluded(c, level)) continue;
       if (level == 0) {
         best_ = c;
@@ -116,10 +117,25 @@ class BranchAndBound {
     }
   }
 
+  // Whether options.stop asked to give up: polled on every call of Poll,
+  // on every kStopPoll-th of Stopped (a block's children cost one pass over
+  // the points; a rotation's top-level blocks, many).
+  bool Poll() {
+    if (!stopped_ && options_.stop) stopped_ = options_.stop();
+    return stopped_;
+  }
+  bool Stopped() {
+    constexpr unsigned kStopPoll = 256;
+    return ++polls_ % kStopPoll == 0 ? Poll() : stopped_;
+  }
+  bool stopped() const { return stopped_; }
+
   Block best_{-1, 0, 0, 0};
   size_t evaluations_ = 0;
 
  private:
+  unsigned polls_ = 0;
+  bool stopped_ = false;
   const PreparedMap& db_;
   const std::vector<Rotation>& rotations_;
   const CorrelativeOptions& options_;
@@ -179,6 +195,7 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   std::vector<Rotation> rotations;
   const double max_half = std::max(0.0, options.max_half_window_m);
   for (size_t ri = 0; ri < regions.size(); ++ri) {
+    if (options.stop && options.stop()) return result;
     const SearchRegion& reg = regions[ri];
     if (!std::isfinite(reg.theta) || !std::isfinite(reg.centroid_target.x) || !std::isfinite(reg.centroid_target.y)) {
       continue;
@@ -229,6 +246,7 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   }
   const LikelihoodLevel& top_level = db.level(top);
   for (size_t k = 0; k < rotations.size(); ++k) {
+    if (bnb.Poll()) return result;
     const Rotation& r = rotations[k];
     for (int dx = r.x0; dx <= r.x1; dx += top_step) {
       for (int dy = r.y0; dy <= r.y1; dy += top_step) {
@@ -239,6 +257,7 @@ CorrelativeResult CorrelativeSearch(const std::vector<Point2>& query_points, con
   bnb.evaluations_ = candidates.size();
   std::sort(candidates.begin(), candidates.end(), [](const Block& a, const Block& b) { return a.score > b.score; });
   bnb.Search(top, candidates);
+  if (bnb.stopped()) return result;
   result.evaluations = bnb.evaluations_;
   if (bnb.best_.rotation < 0) {
     bnb.best_ = {0, 0, 0, 0};  // nothing above min_score: report the first rotation's centre, score 0

@@ -6,6 +6,7 @@
 // 2^h-cell blocks of translations with the max-pooled pyramid levels.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "core/align/prepared_map.h"
@@ -43,6 +44,10 @@ struct CorrelativeOptions {
   double exclude_theta = 0.0;
   double exclude_radius_m = 0.0;
   double exclude_angle_rad = 0.0;
+  // Polled while searching (when set): once it returns true the search gives
+  // up and finds nothing. A caller's deadline or cancellation then ends a
+  // search that an unstructured map would keep busy for seconds.
+  std::function<bool()> stop;
 };
 
 struct CorrelativeResult {

@@ -118,6 +118,11 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     const double second = second_pose(hits[0]);
     if (second > 0) out->verdict = Judge(&judged, options.confidence, second);
   }
+  // An answer whose searches were given up (their stop) is never sure, nor
+  // its place clear: the rivals were not all looked for.
+  const std::function<bool()>& stop = options.match.correlative.stop;
+  const bool given_up = stop && stop();
+  if (given_up) out->verdict.sure = false;
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
 
@@ -127,7 +132,8 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // min_margin), though the calibrated confidence or the maps' pose spread
   // keep the answer unsure.
   const Verdict& v = out->verdict;
-  const bool place_clear = options.changes_where_place_clear && v.best_score >= options.confidence.min_score &&
+  const bool place_clear = options.changes_where_place_clear && !given_up &&
+                           v.best_score >= options.confidence.min_score &&
                            v.best_score - v.rival_score >= options.confidence.min_margin;
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
@@ -399,6 +405,12 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   return hits;
 }
 
+LocalizeOptions WithStop(const LocalizeOptions& options, const std::function<bool()>& stop) {
+  LocalizeOptions stopping = options;
+  stopping.match.correlative.stop = stop;
+  return stopping;
+}
+
 }  // namespace localize_internal
 
 using namespace localize_internal;
@@ -420,9 +432,10 @@ LocalQuery PrepareLocalQuery(LocalMap map, const LocalizeOptions& options, const
   return q;
 }
 
-Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+Localization Localize(const LocalQuery& query, const MapSource& source, const LocalizeOptions& given,
                       const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
                       bool with_changes) {
+  const LocalizeOptions options = WithStop(given, stop);
   Localization out;
   std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, stop, &out.stats);
   SetCollectionPoses(source, &hits);

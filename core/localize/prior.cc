@@ -225,9 +225,10 @@ Status ValidatePrior(const Prior& prior) {
   return Status::Ok();
 }
 
-Localization LocalizeNear(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
+Localization LocalizeNear(const LocalQuery& query, const MapSource& source, const LocalizeOptions& given,
                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
                           const std::function<bool()>& stop, bool with_changes) {
+  const LocalizeOptions options = WithStop(given, stop);
   Localization out;
   // Where the query's points can lie in the collection's frame.
   const double reach = QueryReach(query);

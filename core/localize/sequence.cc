@@ -67,9 +67,10 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
 }
 
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
-                              const MapSource& source, const LocalizeOptions& options,
+                              const MapSource& source, const LocalizeOptions& given,
                               const std::function<bool(uint64_t)>& excluded, const std::function<bool()>& stop,
                               bool with_changes) {
+  const LocalizeOptions options = WithStop(given, stop);
   Localization out;
   // Every map of the sequence proposes poses for the newest: its own hits,
   // carried to the newest through the odometry. A look-alike that fools the

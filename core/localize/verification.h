@@ -24,6 +24,10 @@ struct Candidate {
 // origin, m: where a prior puts the origin, the points lie within this.
 double QueryReach(const LocalQuery& query);
 
+// `options` whose scan matches give up once `stop` returns true (a caller's
+// deadline or cancellation), not only between them.
+LocalizeOptions WithStop(const LocalizeOptions& options, const std::function<bool()>& stop);
+
 // The hit of a scan match: its pose, shares and verification score.
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options);
 // The hit at `pose`, measured as verification measures (no search).

@@ -244,6 +244,39 @@ TEST(ScanMatchTest, CorrelativeSearchFindsTheExhaustiveBest) {
   }
 }
 
+// A search whose stop turns true gives up soon after (a caller's deadline),
+// finding nothing; one whose stop stays false finds what it finds without one.
+TEST(ScanMatchTest, CorrelativeSearchGivesUpWhenItsStopTurnsTrue) {
+  const PreparedMap db = PrepareMap(DemoMaps()[40]);
+  const PreparedQuery query = PrepareQuery(MovedCopy(DemoMaps()[43], {0.3, -0.2, Deg(2)}));
+  SearchRegion wide;  // every turn over a wide window: thousands of blocks
+  wide.half_window_rad = M_PI;
+  wide.centroid_target = query.centroid;
+  wide.half_window_x_m = wide.half_window_y_m = 8.0;
+  CorrelativeOptions exact;
+  exact.min_score = 0.0;
+  const CorrelativeResult unbounded = CorrelativeSearch(query.search_points, db, {wide}, exact);
+  ASSERT_TRUE(unbounded.found);
+
+  CorrelativeOptions never = exact;
+  size_t never_polls = 0;
+  never.stop = [&] { return ++never_polls, false; };
+  const CorrelativeResult same = CorrelativeSearch(query.search_points, db, {wide}, never);
+  EXPECT_GT(never_polls, 0u);
+  EXPECT_EQ(same.score, unbounded.score);
+  EXPECT_EQ(same.evaluations, unbounded.evaluations);
+
+  for (size_t stop_at : {size_t{1}, size_t{3}}) {
+    CorrelativeOptions stopping = exact;
+    size_t polls = 0;
+    stopping.stop = [&] { return ++polls >= stop_at; };
+    const CorrelativeResult given_up = CorrelativeSearch(query.search_points, db, {wide}, stopping);
+    EXPECT_FALSE(given_up.found) << stop_at;
+    EXPECT_EQ(given_up.score, 0.0) << stop_at;
+    EXPECT_EQ(polls, stop_at) << "polled again after it said stop";
+  }
+}
+
 // A bound from finer blocks is still a bound (>= the search's best over the
 // window at that angle) and never looser than the coarsest level's.
 TEST(ScanMatchTest, CorrelativeBoundFromFinerBlocksStillBoundsTheSearch) {

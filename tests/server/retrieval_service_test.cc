@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -139,6 +140,33 @@ TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
   status = server_->client().Retrieve(other, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
+}
+
+// Thousands of points scattered over 180 m: within every limit, but the
+// worst case of scan matching (nothing to prune), which ran for seconds to
+// minutes. max_query_seconds ends it with DEADLINE_EXCEEDED.
+TEST(QueryBudgetTest, AQueryPastMaxQuerySecondsIsGivenUp) {
+  v1::LocalMap scattered;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> coordinate(-90.0f, 90.0f);
+  for (int i = 0; i < 5000; ++i) scattered.add_x(coordinate(rng)), scattered.add_y(coordinate(rng));
+  TempDir dir;
+  server::ServerConfig config;
+  config.max_query_seconds = 0.2;
+  TestServer server(dir.path(), config);
+  ASSERT_TRUE(server.ok());
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "scattered", scattered), &inserted).ok());
+  v1::RetrieveRequest request;
+  request.set_collection("site");
+  *request.mutable_map() = scattered;
+  v1::RetrieveResponse response;
+  const grpc::Status status = server.client().Retrieve(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
+  EXPECT_NE(status.error_message().find("max_query_seconds (0.2 s)"), std::string::npos) << status.error_message();
+  // The worker it held answers the next call.
+  v1::StatsResponse stats;
+  EXPECT_TRUE(server.client().Stats(v1::StatsRequest(), &stats).ok());
 }
 
 TEST_F(RetrievalServiceTest, AnInfiniteThresholdIsRejected) {
