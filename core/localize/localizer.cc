@@ -96,7 +96,7 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
 
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
-              Localization* out) {
+              Localization* out, bool prior_place) {
   auto t = Clock::now();
   if (!hits.empty() && options.refine_best) {
     LocalizedHit& best = hits[0];
@@ -129,12 +129,12 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // A change mask needs the place, not the pose to 0.2 m that a sure answer
   // promises: masks also where the place is clear, the best hit fitting and
   // no disagreeing hit within the margin (the verdict's own min_score and
-  // min_margin), though the calibrated confidence or the maps' pose spread
-  // keep the answer unsure.
+  // min_margin; a prior's place needs no margin), though the calibrated
+  // confidence or the maps' pose spread keep the answer unsure.
   const Verdict& v = out->verdict;
   const bool place_clear = options.changes_where_place_clear && !given_up &&
                            v.best_score >= options.confidence.min_score &&
-                           v.best_score - v.rival_score >= options.confidence.min_margin;
+                           (prior_place || v.best_score - v.rival_score >= options.confidence.min_margin);
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
     std::vector<AlignedMap> place;

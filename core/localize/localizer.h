@@ -147,6 +147,18 @@ struct LocalizeOptions {
   // every answer whose best hit fits (the margin not asked): .488 held out,
   // but 14.8 % false (mit 49.7 %: look-alikes).
   bool changes_where_place_clear = true;
+  // ... and for a robot's prior query (loose or tight), where its best hit
+  // fits, whatever the margin: the prior rules the look-alikes out itself
+  // (as it does for the verdict's min_confidence), so a rival within the
+  // margin is another pose of the place, not another place. No threshold of
+  // its own. Served (lmd-eval served, with changes, 2026-12-06, all answers
+  // the same otherwise): --mode tracking, true change in the top mask .515
+  // -> .553 (held out .526 -> .564), false masks 7.1 -> 6.9 % (held out 6.9
+  // -> 6.6 %); --mode prior .498 -> .553 (held out .507 -> .561), false
+  // masks 6.7 -> 7.1 % (held out 6.6 -> 6.4 %; fr079, tuned on, 5.7 ->
+  // 11.5 %). A best hit at 0.5 instead of min_score: tracking .633 at 8.5 %
+  // false, 0.4: .663 at 12.1 %.
+  bool prior_changes_without_margin = true;
   size_t top_k = 10;  // hits returned
   // Prior queries (prior.h): anchored maps matched, nearest the predicted
   // query first, and the window beyond the prior's radius; with

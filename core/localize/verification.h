@@ -118,10 +118,12 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
 
 // The best hit refined, the verdict (with `second_pose`, when set and the
 // verdict would be sure: the best map's score at another pose, a rival),
-// the change masks when asked and sure, and the hits cut to top_k.
+// the change masks when asked and sure or the place is clear (`prior_place`:
+// a prior answered for the place, LocalizeOptions::prior_changes_without_margin),
+// and the hits cut to top_k.
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
-              Localization* out);
+              Localization* out, bool prior_place = false);
 
 // Sets each hit's collection_pose from its map's anchor, where it has one.
 void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits);

@@ -1109,6 +1109,43 @@ TEST(LocalizerTest, AnUnsureAnswerWhosePlaceIsClearStillGivesItsChangeMasks) {
   EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " unsure answers gave masks";
 }
 
+// A robot's prior answers for its place: where no disagreeing hit may come
+// within the margin (a margin above 1 asked, so nothing is sure and no global
+// answer's place is clear), a prior's answer whose best hit fits still gives
+// its change masks, on the change; with prior_changes_without_margin off,
+// none.
+TEST(LocalizerTest, APriorsAnswerGivesItsChangeMasksWhereItsBestHitFitsWhateverTheMargin) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions no_margin_passes = kOptions;
+  no_margin_passes.confidence.min_margin = 1.1;
+  LocalizeOptions margin_needed = no_margin_passes;
+  margin_needed.prior_changes_without_margin = false;
+  std::mt19937_64 rng(5);
+  size_t tasks = 0, with_masks = 0;
+  for (size_t q = 4; q < DemoMaps().size() && tasks < 6; q += 23) {
+    LocalMap changed = DemoMaps()[q];
+    const Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
+    if (!change.ok()) continue;
+    ++tasks;
+    const Pose2 move = KnownMoves()[q % KnownMoves().size()];
+    const LocalMap query_map = MovedCopy(changed, move);
+    std::vector<Point2> changed_points;  // in the query's own frame
+    for (const Point2& p : change->changed_points) changed_points.push_back(TransformPoint(Inverse(move), p));
+    const LocalQuery query = PrepareLocalQuery(query_map, kOptions);
+    const Prior prior = PriorOff(query_map.truth.global_frame, {0.2, -0.1, 1.5}, 0.4, 3.0);
+    const Localization l = LocalizeNear(query, collection, no_margin_passes, prior, {}, {}, true);
+    EXPECT_FALSE(l.verdict.sure) << q;
+    EXPECT_TRUE(LocalizeNear(query, collection, margin_needed, prior, {}, {}, true).changes.empty()) << q;
+    if (l.changes.empty()) continue;
+    ++with_masks;
+    EXPECT_GE(l.verdict.best_score, kOptions.confidence.min_score) << q;
+    EXPECT_TRUE(MaskHitsChange(l.changes[0].points, changed_points, 0.5)) << "map " << q;
+  }
+  ASSERT_EQ(tasks, 6u);
+  EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " prior answers gave masks";
+}
+
 // lmdd prepares a map once and uses it both to store and to query.
 TEST(LocalizerTest, APreparedPlaceGivesTheSameQueryAsPreparingFromScratch) {
   const LocalMap& map = DemoMaps()[42];
