@@ -13,7 +13,8 @@ namespace lmd::server {
 struct ServerConfig {
   // Address to serve gRPC on, HOST:PORT. Port 0 picks a free port.
   std::string listen = "127.0.0.1:50051";
-  // Directory of the RocksDB store; created if absent.
+  // Directory of the RocksDB store. A new store is created only in an empty
+  // or missing directory: one holding files but no store is refused.
   std::string data_dir = "./lmd-data";
   // spdlog level: trace, debug, info, warn, error, critical, off.
   std::string log_level = "info";

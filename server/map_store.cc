@@ -148,11 +148,43 @@ struct IndexChange {
   std::vector<std::pair<uint64_t, const MapWrite*>> added;
 };
 
+// Files RocksDB writes into a directory at every open, before a new store's
+// CURRENT exists: its lock and its info logs. They hold no maps, so a first
+// start that failed after writing them may be retried.
+bool HoldsNoMaps(const std::string& file_name) {
+  return file_name == "LOCK" || file_name == "LOG" || file_name.rfind("LOG.old.", 0) == 0;
+}
+
+// A new store is created only in a missing or empty directory. RocksDB, told
+// to create a store where another store's files lie without their CURRENT
+// (a damaged or half-copied store), deletes those files as obsolete; and
+// where it cannot, it leaves a new CURRENT among them.
+Status CheckDataDirectory(const std::string& data_dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::status(data_dir, error);
+  if (status.type() == fs::file_type::not_found) return Status::Ok();
+  if (error) return Status::IoError("cannot read the data directory " + data_dir + ": " + error.message());
+  if (!fs::is_directory(status)) return Status::FailedPrecondition("data directory " + data_dir + " is not a directory");
+  if (fs::exists(fs::path(data_dir) / "CURRENT", error)) return Status::Ok();
+  for (fs::directory_iterator it(data_dir, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (HoldsNoMaps(name)) continue;
+    return Status::FailedPrecondition("data directory " + data_dir + " holds " + Quoted(name) +
+                                      " but no CURRENT file: a damaged store, or no store; lmdd creates a store "
+                                      "only in an empty or missing directory (nothing was changed)");
+  }
+  if (error) return Status::IoError("cannot list the data directory " + data_dir + ": " + error.message());
+  return Status::Ok();
+}
+
 }  // namespace
 
 MapStore::MapStore() = default;
 
 Result<std::unique_ptr<MapStore>> MapStore::Open(const MapStoreOptions& options) {
+  const Status usable = CheckDataDirectory(options.data_dir);
+  if (!usable.ok()) return usable;
   rocksdb::DBOptions db_options;
   db_options.create_if_missing = true;
   db_options.create_missing_column_families = true;

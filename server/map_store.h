@@ -55,7 +55,7 @@ struct RetrieveStats;  // core/index/index.h
 namespace lmd::server {
 
 struct MapStoreOptions {
-  std::string data_dir;      // created if absent
+  std::string data_dir;      // created if absent (see Open)
   bool sync_writes = false;  // fsync the WAL before a write returns
   IndexingConfig indexing;   // must match the store's (checked at open)
 };
@@ -127,6 +127,9 @@ class MapStore {
   // Opens (creating if needed) the store and rebuilds its indexes. IoError or
   // Corruption with the reason if it cannot (unreadable, other format or
   // indexing settings, inconsistent counters); never deletes data.
+  // FailedPrecondition, touching nothing, if data_dir is not a directory, or
+  // holds files but no store (no CURRENT): a store is created only in an
+  // empty or missing directory.
   static Result<std::unique_ptr<MapStore>> Open(const MapStoreOptions& options);
   ~MapStore();
   MapStore(const MapStore&) = delete;

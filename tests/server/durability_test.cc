@@ -5,7 +5,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -184,6 +187,64 @@ TEST(DurabilityTest, UnopenableStoreIsReportedAndLeftAlone) {
   std::string content;
   std::getline(current, content);
   EXPECT_EQ(content, "garbage");  // nothing was "repaired" or deleted
+}
+
+// Every file in `dir` by name, with its bytes.
+std::map<std::string, std::string> FilesIn(const std::string& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    files[entry.path().filename().string()] = bytes.str();
+  }
+  return files;
+}
+
+// lmdd on `data_dir`, expected to refuse it.
+Status StartRefused(const std::string& data_dir) {
+  server::ServerConfig config;
+  config.listen = "127.0.0.1:0";
+  config.data_dir = data_dir;
+  auto started = server::LmdServer::Start(config);
+  return started.ok() ? Status::Ok() : started.status();
+}
+
+// RocksDB would take a store that lost its CURRENT for an empty directory,
+// create a new store there and delete the old one's files.
+TEST(DurabilityTest, StoreWithoutCurrentIsRefusedAndLeftAlone) {
+  TempDir dir;
+  const std::string data = dir.path() + "/data";
+  {
+    TestServer server(data);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &inserted).ok());
+  }
+  ASSERT_TRUE(std::filesystem::remove(data + "/CURRENT"));
+  const auto before = FilesIn(data);
+  const Status refused = StartRefused(data);
+  EXPECT_EQ(refused.code(), Status::Code::kFailedPrecondition) << refused.ToString();
+  EXPECT_NE(refused.message().find("but no CURRENT file"), std::string::npos) << refused.message();
+  EXPECT_EQ(FilesIn(data), before);  // every file still there, byte for byte, and none added
+}
+
+TEST(DurabilityTest, DirectoryOfOtherFilesIsRefusedUntouched) {
+  TempDir dir;
+  std::ofstream(dir.path() + "/000007.log") << "not a store";
+  const Status refused = StartRefused(dir.path());
+  EXPECT_EQ(refused.code(), Status::Code::kFailedPrecondition) << refused.ToString();
+  EXPECT_NE(refused.message().find("'000007.log'"), std::string::npos) << refused.message();
+  const std::map<std::string, std::string> only_it = {{"000007.log", "not a store"}};
+  EXPECT_EQ(FilesIn(dir.path()), only_it);  // no CURRENT, IDENTITY, MANIFEST, LOCK or LOG left behind
+}
+
+// RocksDB's lock and info log, all a failed first start may leave, hold no maps.
+TEST(DurabilityTest, DirectoryWithOnlyLockAndLogGetsANewStore) {
+  TempDir dir;
+  std::ofstream(dir.path() + "/LOCK");
+  std::ofstream(dir.path() + "/LOG") << "an earlier start's log\n";
+  TestServer server(dir.path());
+  EXPECT_TRUE(server.ok());
 }
 
 }  // namespace
