@@ -247,7 +247,7 @@ grpc::ServerUnaryReactor* LmdServiceImpl::ListMaps(grpc::CallbackServerContext* 
   return runner_->Unary(context, "ListMaps", request->collection(),
                         runner_->Authorize(context, request->collection(), Access::kRead), [=] {
     Status status = ValidateCollectionName(request->collection());
-    if (status.ok() && !request->page_token().empty()) status = ValidateMapId(request->page_token(), false);
+    if (status.ok()) status = ValidatePageToken(request->page_token());
     if (!status.ok()) return status;
     if (auto elsewhere = ServedElsewhere(false, request->collection(), context, &v1::LmdService::Stub::ListMaps,
                                          *request, response)) {

@@ -15,6 +15,10 @@ bool AllCharsIn(const std::string& s, const std::string& extra) {
   return true;
 }
 
+// What a map id is (ValidateMapId); a page token is one too.
+constexpr char kMapIdForm[] = "1 to 128 characters from [A-Za-z0-9._:-]";
+bool IsMapId(const std::string& s) { return !s.empty() && s.size() <= 128 && AllCharsIn(s, "._:-"); }
+
 // "12.5": metres for messages, without trailing zeros.
 std::string Metres(double m) {
   char buffer[32];
@@ -90,10 +94,14 @@ Status ValidateCollectionName(const std::string& name) {
 
 Status ValidateMapId(const std::string& map_id, bool allow_empty) {
   if (map_id.empty()) return allow_empty ? Status::Ok() : Status::InvalidArgument("map_id is empty");
-  if (map_id.size() > 128 || !AllCharsIn(map_id, "._:-")) {
-    return Status::InvalidArgument("map_id " + Quoted(map_id) + " must be 1 to 128 characters from [A-Za-z0-9._:-]");
-  }
+  if (!IsMapId(map_id)) return Status::InvalidArgument("map_id " + Quoted(map_id) + " must be " + kMapIdForm);
   return Status::Ok();
+}
+
+Status ValidatePageToken(const std::string& page_token) {
+  if (page_token.empty() || IsMapId(page_token)) return Status::Ok();
+  return Status::InvalidArgument("page_token " + Quoted(page_token) +
+                                 " is not a next_page_token of ListMaps (a map id: " + kMapIdForm + ")");
 }
 
 Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, const std::string& where) {

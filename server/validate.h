@@ -32,6 +32,10 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
 // Metadata and map of one map to insert; `index` is its place in the batch.
 Status ValidateInsert(const v1::InsertMapRequest& request, const ServerConfig& config, size_t index);
 
+// ListMaps' page_token: empty, or a map id (the next_page_token of the
+// page before). InvalidArgument naming page_token otherwise.
+Status ValidatePageToken(const std::string& page_token);
+
 // An insert's request id: empty, or 1 to 64 printable ASCII characters
 // without spaces.
 Status ValidateRequestId(const std::string& request_id);

@@ -269,6 +269,20 @@ TEST_F(MapServiceTest, ListMapsPagesThroughEveryMapInIdOrder) {
   EXPECT_EQ(ids.front(), "map-100");
 }
 
+TEST_F(MapServiceTest, ABadPageTokenIsNamedAsSuch) {
+  TestServer server(dir_.path());
+  v1::InsertMapsResponse ignored;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "a", SquareRoomMap()), &ignored).ok());
+  v1::ListMapsRequest list;
+  list.set_collection("site");
+  list.set_page_token("!!garbage");
+  v1::ListMapsResponse page;
+  const grpc::Status status = server.client().ListMaps(list, &page);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message().rfind("page_token '!!garbage' is not a next_page_token of ListMaps", 0), 0u)
+      << status.error_message();
+}
+
 TEST_F(MapServiceTest, AFailedStreamSaysWhichOfItsMapsAreStored) {
   TestServer server(dir_.path());
   std::vector<v1::InsertMapRequest> requests;
