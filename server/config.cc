@@ -29,9 +29,10 @@ Status ParseUnsigned(const std::string& key, const std::string& value, uint64_t 
 
 // `min` 1 for limits: 0 would refuse every request.
 template <typename T>
-Status SetUnsigned(const std::string& key, const std::string& value, T* field, uint64_t min = 0) {
+Status SetUnsigned(const std::string& key, const std::string& value, T* field, uint64_t min = 0,
+                   uint64_t max = std::numeric_limits<T>::max()) {
   uint64_t parsed = 0;
-  Status status = ParseUnsigned(key, value, min, std::numeric_limits<T>::max(), &parsed);
+  Status status = ParseUnsigned(key, value, min, max, &parsed);
   if (status.ok()) *field = static_cast<T>(parsed);
   return status;
 }
@@ -109,10 +110,12 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "cluster_replication_factor") return SetUnsigned(key, value, &config->cluster_replication_factor, 1);
   if (key == "cluster_replace_after_s") return SetUnsigned(key, value, &config->cluster_replace_after_s);
   if (key == "cluster_lease_ttl_s") return SetUnsigned(key, value, &config->cluster_lease_ttl_s, 1);
-  if (key == "cluster_replicate_timeout_ms") return SetUnsigned(key, value, &config->cluster_replicate_timeout_ms, 1);
+  if (key == "cluster_replicate_timeout_ms") {
+    return SetUnsigned(key, value, &config->cluster_replicate_timeout_ms, 1, kMaxReplicateTimeoutMs);
+  }
   if (key == "cluster_log_mb") return SetUnsigned(key, value, &config->cluster_log_mb);
-  if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads);
-  if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls);
+  if (key == "worker_threads") return SetUnsigned(key, value, &config->worker_threads, 0, kMaxWorkerThreads);
+  if (key == "max_queued_calls") return SetUnsigned(key, value, &config->max_queued_calls, 1);
   if (key == "verify_candidates") return SetUnsigned(key, value, &config->verify_candidates);
   if (key == "retain_maps_per_collection") return SetUnsigned(key, value, &config->retain_maps_per_collection);
   if (key == "insert_request_ids_kept") return SetUnsigned(key, value, &config->insert_request_ids_kept, 1);

@@ -10,6 +10,13 @@
 
 namespace lmd::server {
 
+// Calls run on a pool of threads; far more than any machine has cores only
+// costs memory, and the system refuses tens of thousands (lmdd would abort).
+inline constexpr uint32_t kMaxWorkerThreads = 1024;
+// A write waits this long at most for a copy's confirmation: a minute is
+// already far beyond a copy that keeps up.
+inline constexpr uint32_t kMaxReplicateTimeoutMs = 60000;
+
 struct ServerConfig {
   // Address to serve gRPC on, HOST:PORT. Port 0 picks a free port.
   std::string listen = "127.0.0.1:50051";
@@ -78,9 +85,10 @@ struct ServerConfig {
   // Bearer tokens per collection (format in auth.h). Empty: no token checks.
   std::string tokens_file;
 
-  // Concurrency. Threads that run calls (0: one per hardware thread), and
-  // calls that may wait for one; a call beyond that is refused at once with
-  // RESOURCE_EXHAUSTED, which bounds memory under overload.
+  // Concurrency. Threads that run calls (0: one per hardware thread; at most
+  // kMaxWorkerThreads), and calls that may wait for one (at least 1); a call
+  // beyond that is refused at once with RESOURCE_EXHAUSTED, which bounds
+  // memory under overload.
   uint32_t worker_threads = 0;
   uint32_t max_queued_calls = 1024;
   // What lmdd computed from recently seen maps (descriptor, scan-matching
@@ -144,7 +152,8 @@ struct ServerConfig {
   // in-sync copies. etcd grants at least 2 s with its default flags.
   uint32_t cluster_lease_ttl_s = 2;
   // How long a primary waits for a copy to confirm a write, ms, before it
-  // takes that copy out of the in-sync set (it then catches up).
+  // takes that copy out of the in-sync set (it then catches up). At most
+  // kMaxReplicateTimeoutMs.
   uint32_t cluster_replicate_timeout_ms = 1000;
   // Writes a primary keeps in memory per collection, MiB, for copies that
   // catch up after a short absence; one further behind is copied whole.

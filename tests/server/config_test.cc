@@ -53,6 +53,21 @@ TEST(ConfigTest, UnknownKeyAndBadValueNameFileAndLine) {
   EXPECT_EQ(LoadConfigFile(dir.path() + "/absent.conf", &config).code(), Status::Code::kIoError);
 }
 
+// Values that would crash lmdd (a thread per worker), make it refuse every
+// call, or wrap around in a deadline are refused, naming the key and range.
+TEST(ConfigTest, AbsurdConcurrencySettingsAreRefusedWithTheirRange) {
+  ServerConfig config;
+  Status status = SetConfigValue("worker_threads", "100000", &config);
+  EXPECT_EQ(status.message(), "worker_threads must be a whole number from 0 to 1024, got '100000'");
+  EXPECT_TRUE(SetConfigValue("worker_threads", "1024", &config).ok());
+  EXPECT_EQ(config.worker_threads, 1024u);
+  status = SetConfigValue("max_queued_calls", "0", &config);
+  EXPECT_NE(status.message().find("max_queued_calls must be a whole number from 1 to"), std::string::npos)
+      << status.message();
+  status = SetConfigValue("cluster_replicate_timeout_ms", "3000000000", &config);
+  EXPECT_EQ(status.message(), "cluster_replicate_timeout_ms must be a whole number from 1 to 60000, got '3000000000'");
+}
+
 TEST(ConfigTest, InnerWordsChooseTheStoresDescriptor) {
   ServerConfig config;
   EXPECT_FALSE(config.inner_words);
