@@ -94,7 +94,9 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
 
   const size_t threads = config.worker_threads ? config.worker_threads : std::thread::hardware_concurrency();
   server->metrics_ = std::make_unique<CallMetrics>();
-  server->pool_ = std::make_unique<WorkerPool>(threads, config.max_queued_calls);
+  Result<std::unique_ptr<WorkerPool>> pool = WorkerPool::Start(threads, config.max_queued_calls);
+  if (!pool.ok()) return pool.status();
+  server->pool_ = std::move(pool).value();
   server->runner_ = std::make_unique<CallRunner>(server->pool_.get(), server->auth_.get(), server->metrics_.get());
   server->service_ = std::make_unique<LmdServiceImpl>(config, server->store_.get(), server->runner_.get(),
                                                       server->metrics_.get());

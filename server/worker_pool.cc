@@ -1,13 +1,25 @@
 #include "server/worker_pool.h"
 
 #include <algorithm>
+#include <string>
+#include <system_error>
 
 namespace lmd::server {
 
-WorkerPool::WorkerPool(size_t threads, size_t max_queued) : max_queued_(max_queued) {
+WorkerPool::WorkerPool(size_t max_queued) : max_queued_(max_queued) {}
+
+Result<std::unique_ptr<WorkerPool>> WorkerPool::Start(size_t threads, size_t max_queued) {
+  std::unique_ptr<WorkerPool> pool(new WorkerPool(max_queued));
   threads = std::max<size_t>(threads, 1);
-  threads_.reserve(threads);
-  for (size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { Work(); });
+  pool->threads_.reserve(threads);
+  try {
+    for (size_t i = 0; i < threads; ++i) pool->threads_.emplace_back([worker = pool.get()] { worker->Work(); });
+  } catch (const std::system_error& error) {
+    return Status::ResourceExhausted("cannot start worker thread " + std::to_string(pool->threads_.size() + 1) +
+                                     " of " + std::to_string(threads) + ": " + error.what() +
+                                     "; lower worker_threads");
+  }
+  return pool;
 }
 
 WorkerPool::~WorkerPool() {

@@ -8,16 +8,21 @@
 #include <condition_variable>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
+
+#include "core/status.h"
 
 namespace lmd::server {
 
 class WorkerPool {
  public:
   // Starts `threads` workers (at least 1); at most `max_queued` tasks wait.
-  WorkerPool(size_t threads, size_t max_queued);
+  // ResourceExhausted, the workers already started joined, if the system
+  // refuses a thread (std::thread would throw, and lmdd abort).
+  static Result<std::unique_ptr<WorkerPool>> Start(size_t threads, size_t max_queued);
   // Runs the tasks already queued, then joins the workers.
   ~WorkerPool();
   WorkerPool(const WorkerPool&) = delete;
@@ -31,6 +36,7 @@ class WorkerPool {
   size_t queued() const;
 
  private:
+  explicit WorkerPool(size_t max_queued);
   void Work();
 
   const size_t max_queued_;
