@@ -11,6 +11,7 @@
 #include <grpcpp/create_channel.h>
 #include <grpcpp/security/credentials.h>
 
+#include "core/util/host_port.h"
 #include "proto/metadata_keys.h"
 
 namespace lmd::client {
@@ -76,6 +77,8 @@ std::string RandomRequestId() {
 }  // namespace
 
 Result<std::unique_ptr<LmdClient>> LmdClient::Create(const ClientOptions& options) {
+  const Result<HostPort> target = ParseHostPort(options.target, 1, "server address");
+  if (!target.ok()) return target.status();
   if (!HeaderSafe(options.token)) return Status::InvalidArgument("the token must be printable ASCII");
   Result<std::shared_ptr<grpc::ChannelCredentials>> credentials = MakeCredentials(options);
   if (!credentials.ok()) return credentials.status();

@@ -40,7 +40,7 @@
 namespace lmd::client {
 
 struct ClientOptions {
-  // lmdd's (or the proxy's) address, HOST:PORT.
+  // lmdd's (or the proxy's) address, HOST:PORT (core/util/host_port.h).
   std::string target = "127.0.0.1:50051";
   // Deadline of each call, retries included.
   std::chrono::milliseconds deadline = std::chrono::seconds(30);
@@ -70,8 +70,8 @@ struct ClientOptions {
 
 class LmdClient {
  public:
-  // InvalidArgument if a TLS file cannot be read or the token is not
-  // printable ASCII.
+  // InvalidArgument if the target is not HOST:PORT with a port from 1 to
+  // 65535, a TLS file cannot be read or the token is not printable ASCII.
   static Result<std::unique_ptr<LmdClient>> Create(const ClientOptions& options);
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;

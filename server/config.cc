@@ -5,6 +5,8 @@
 #include <fstream>
 #include <limits>
 
+#include "core/util/host_port.h"
+
 namespace lmd::server {
 namespace {
 
@@ -163,10 +165,9 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config) {
 }
 
 bool IsLoopbackAddress(const std::string& host_port) {
-  std::string host = host_port;
-  const auto colon = host.rfind(':');
-  if (colon != std::string::npos) host.resize(colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const Result<HostPort> address = ParseHostPort(host_port, 0, "address");
+  if (!address.ok()) return false;
+  const std::string& host = address->host;
   return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
 }
 

@@ -179,7 +179,8 @@ Status LoadConfigFile(const std::string& path, ServerConfig* config);
 // key is unknown or the value does not parse.
 Status SetConfigValue(const std::string& key, const std::string& value, ServerConfig* config);
 
-// True if HOST of a HOST:PORT address is a loopback address or "localhost".
+// True if HOST of a HOST:PORT address (ParseHostPort) is a loopback address
+// or "localhost"; false for anything else, HOST:PORT or not.
 bool IsLoopbackAddress(const std::string& host_port);
 
 }  // namespace lmd::server

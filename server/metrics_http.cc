@@ -4,8 +4,9 @@
 #include <microhttpd.h>
 #include <netinet/in.h>
 
-#include <cstdlib>
 #include <cstring>
+
+#include "core/util/host_port.h"
 
 namespace lmd::server {
 namespace {
@@ -31,17 +32,15 @@ MHD_Result Handle(void* cls, MHD_Connection* connection, const char* url, const 
 
 Result<std::unique_ptr<MetricsHttpServer>> MetricsHttpServer::Start(const std::string& host_port,
                                                                     std::function<std::string()> render) {
-  const auto colon = host_port.rfind(':');
+  const Result<HostPort> listen = ParseHostPort(host_port, 0, "metrics_listen");
+  if (!listen.ok()) return listen.status();
   sockaddr_in address{};
   address.sin_family = AF_INET;
-  char* end = nullptr;
-  const long port = colon == std::string::npos ? -1 : std::strtol(host_port.c_str() + colon + 1, &end, 10);
-  std::string host = colon == std::string::npos ? "" : host_port.substr(0, colon);
-  if (host == "localhost") host = "127.0.0.1";
-  if (port < 0 || port > 65535 || *end != '\0' || inet_pton(AF_INET, host.c_str(), &address.sin_addr) != 1) {
+  const std::string host = listen->host == "localhost" ? "127.0.0.1" : listen->host;
+  if (inet_pton(AF_INET, host.c_str(), &address.sin_addr) != 1) {
     return Status::InvalidArgument("metrics_listen must be IPv4:PORT, got '" + host_port + "'");
   }
-  address.sin_port = htons(static_cast<uint16_t>(port));
+  address.sin_port = htons(static_cast<uint16_t>(listen->port));
 
   std::unique_ptr<MetricsHttpServer> server(new MetricsHttpServer());
   server->render_ = std::move(render);
@@ -49,7 +48,7 @@ Result<std::unique_ptr<MetricsHttpServer>> MetricsHttpServer::Start(const std::s
                                      &server->render_, MHD_OPTION_SOCK_ADDR, &address, MHD_OPTION_END);
   if (server->daemon_ == nullptr) return Status::Internal("cannot serve metrics on " + host_port);
   const MHD_DaemonInfo* info = MHD_get_daemon_info(server->daemon_, MHD_DAEMON_INFO_BIND_PORT);
-  server->port_ = info ? info->port : static_cast<int>(port);
+  server->port_ = info ? info->port : listen->port;
   return server;
 }
 

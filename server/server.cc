@@ -11,6 +11,7 @@
 #include <grpcpp/server_builder.h>
 #include <spdlog/spdlog.h>
 
+#include "core/util/host_port.h"
 #include "grpc/health/v1/health.pb.h"
 #include "server/auth.h"
 #include "server/call_runner.h"
@@ -63,11 +64,8 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerCon
 LmdServer::LmdServer() = default;
 
 Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) {
-  const auto colon = config.listen.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == config.listen.size() ||
-      config.listen.find_first_not_of("0123456789", colon + 1) != std::string::npos) {
-    return Status::InvalidArgument("listen address '" + config.listen + "' is not HOST:PORT");
-  }
+  const Result<HostPort> listen = ParseHostPort(config.listen, 0, "listen address");
+  if (!listen.ok()) return listen.status();
   const bool secured = !config.tls_cert_file.empty() && !config.tokens_file.empty();
   if (!IsLoopbackAddress(config.listen) && !secured && !config.allow_insecure_remote) {
     return Status::InvalidArgument("refusing to serve on " + config.listen +

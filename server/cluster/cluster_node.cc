@@ -12,6 +12,7 @@
 
 #include "core/describe/lmd_codec.h"
 #include "core/place/place_features.h"
+#include "core/util/host_port.h"
 #include "core/util/split.h"
 #include "server/grpc_status.h"
 
@@ -68,6 +69,14 @@ Result<std::unique_ptr<ClusterNode>> ClusterNode::Start(const ServerConfig& conf
   EtcdClientOptions options;
   options.endpoints = SplitCommas(config.cluster_etcd);
   if (options.endpoints.empty()) return Status::InvalidArgument("cluster_etcd names no etcd endpoint");
+  for (const std::string& endpoint : options.endpoints) {
+    const Result<HostPort> parsed = ParseHostPort(endpoint, 1, "cluster_etcd endpoint");
+    if (!parsed.ok()) return parsed.status();
+  }
+  if (!config.cluster_advertise.empty()) {
+    const Result<HostPort> parsed = ParseHostPort(config.cluster_advertise, 1, "cluster_advertise");
+    if (!parsed.ok()) return parsed.status();
+  }
   if (config.cluster_prefix.empty() || config.cluster_prefix.back() == '/') {
     return Status::InvalidArgument("cluster_prefix must be non-empty and not end with '/'");
   }

@@ -124,6 +124,15 @@ TEST_F(LmdctlTest, UnreachableServerFailsCleanly) {
   EXPECT_NE(run.err.find("UNAVAILABLE"), std::string::npos) << run.err;
 }
 
+// gRPC would dial port 99999 modulo 65536 (34463).
+TEST_F(LmdctlTest, APortOutOfRangeIsRefusedNotWrappedAround) {
+  for (const std::string port : {"99999", "65536", "0"}) {
+    CliRun run = RunLmdctl("--server 127.0.0.1:" + port + " --timeout 2 collections", dir_);
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_EQ(run.err, "lmdctl: server address '127.0.0.1:" + port + "': port " + port + " is not from 1 to 65535\n");
+  }
+}
+
 }  // namespace
 }  // namespace lmd::testing
 

@@ -496,5 +496,18 @@ TEST_F(MapServiceTest, RemoteAddressWithoutSecurityIsRefused) {
   EXPECT_NE(started.status().message().find("is not HOST:PORT"), std::string::npos) << started.status().message();
 }
 
+// gRPC would serve on port 99999 modulo 65536 (34463), and on 65536 on a random port.
+TEST_F(MapServiceTest, AListenPortOutOfRangeIsRefused) {
+  server::ServerConfig config;
+  config.data_dir = dir_.path();
+  for (const std::string port : {"99999", "65536"}) {
+    config.listen = "127.0.0.1:" + port;
+    auto started = server::LmdServer::Start(config);
+    ASSERT_FALSE(started.ok()) << port;
+    EXPECT_EQ(started.status().message(),
+              "listen address '127.0.0.1:" + port + "': port " + port + " is not from 0 to 65535");
+  }
+}
+
 }  // namespace
 }  // namespace lmd::testing
