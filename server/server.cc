@@ -1,5 +1,11 @@
 #include "server/server.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -57,6 +63,30 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerCon
     options.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(options);
+}
+
+// Why gRPC could not listen on `address`, which it logs but does not return:
+// what binding the address ourselves says ("Address already in use").
+std::string WhyCannotListen(const HostPort& address) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE;
+  addrinfo* found = nullptr;
+  const int resolved = getaddrinfo(address.host.c_str(), std::to_string(address.port).c_str(), &hints, &found);
+  if (resolved != 0) return gai_strerror(resolved);
+  std::string reason = "address in use or not available";  // if it binds now, it did not a moment ago
+  for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
+    const int fd = socket(a->ai_family, a->ai_socktype, a->ai_protocol);
+    const int one = 1;
+    const bool bound = fd >= 0 && setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) == 0 &&  // as gRPC does
+                       bind(fd, a->ai_addr, a->ai_addrlen) == 0;
+    if (!bound) reason = std::strerror(errno);
+    if (fd >= 0) close(fd);
+    if (!bound) break;
+  }
+  freeaddrinfo(found);
+  return reason;
 }
 
 }  // namespace
@@ -132,7 +162,7 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   if (!server->server_ || server->port_ == 0) {
     if (server->cluster_) server->cluster_->Stop();
     server->store_->Close();
-    return Status::Internal("cannot listen on " + config.listen);
+    return Status::Internal("cannot listen on " + config.listen + ": " + WhyCannotListen(*listen));
   }
   {
     std::lock_guard<std::mutex> lock(server->health_mu_);
