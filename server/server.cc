@@ -167,7 +167,13 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   {
     std::lock_guard<std::mutex> lock(server->health_mu_);
     server->health_open_ = true;
-    server->server_->GetHealthCheckService()->SetServingStatus(!server->cluster_ || server->cluster_->ready());
+    const bool serving = !server->cluster_ || server->cluster_->ready();
+    grpc::HealthCheckServiceInterface* health = server->server_->GetHealthCheckService();
+    // Checks may name the service (Check(service="lmd.v1.LmdService")) as
+    // well as ask for the whole server (""); every later SetServingStatus
+    // without a name sets both.
+    health->SetServingStatus(v1::LmdService::service_full_name(), serving);
+    health->SetServingStatus(serving);
   }
 
   if (!config.metrics_listen.empty()) {

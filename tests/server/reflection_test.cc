@@ -74,20 +74,39 @@ TEST(ReflectionTest, DescribesTheHealthServiceAndLmdMessages) {
   EXPECT_EQ(unknown.find(".proto"), std::string::npos);
 }
 
-TEST(HealthTest, ReportsServing) {
-  TempDir dir;
-  TestServer server(dir.path());
-  auto channel = grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials());
+// grpc.health.v1 Check of `service` ("": the whole server).
+grpc::Status CheckHealth(const std::string& address, const std::string& service,
+                         grpc::health::v1::HealthCheckResponse* response) {
+  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
   grpc::health::v1::HealthCheckRequest request;
-  grpc::health::v1::HealthCheckResponse response;
+  request.set_service(service);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
   // Health's service stubs are not generated here, so the call is made by name.
-  const grpc::Status status = grpc::internal::BlockingUnaryCall(
+  return grpc::internal::BlockingUnaryCall(
       channel.get(), grpc::internal::RpcMethod("/grpc.health.v1.Health/Check", grpc::internal::RpcMethod::NORMAL_RPC),
-      &context, request, &response);
+      &context, request, response);
+}
+
+TEST(HealthTest, ReportsServing) {
+  TempDir dir;
+  TestServer server(dir.path());
+  grpc::health::v1::HealthCheckResponse response;
+  const grpc::Status status = CheckHealth(server.address(), "", &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+// Probes that name the service (grpc_health_probe -service, Kubernetes'
+// grpc probe's service field) get its status, not NOT_FOUND.
+TEST(HealthTest, ReportsTheLmdServiceByName) {
+  TempDir dir;
+  TestServer server(dir.path());
+  grpc::health::v1::HealthCheckResponse response;
+  grpc::Status status = CheckHealth(server.address(), "lmd.v1.LmdService", &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+  EXPECT_EQ(CheckHealth(server.address(), "no.such.Service", &response).error_code(), grpc::StatusCode::NOT_FOUND);
 }
 
 }  // namespace
