@@ -1,8 +1,14 @@
 #include "server/map_store.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <climits>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -103,10 +109,16 @@ std::string AutoMapId(uint64_t number) {
   return buffer;
 }
 
-Status FromRocks(const rocksdb::Status& status, const std::string& what) {
+// `status` as lmd's (Corruption or IoError) with `message`.
+Status FromRocksWithMessage(const rocksdb::Status& status, const std::string& message) {
   if (status.ok()) return Status::Ok();
-  if (status.IsCorruption()) return Status::Corruption(what + ": " + status.ToString());
-  return Status::IoError(what + ": " + status.ToString());
+  if (status.IsCorruption()) return Status::Corruption(message);
+  return Status::IoError(message);
+}
+
+// ... saying `what` failed, and RocksDB's reason.
+Status FromRocks(const rocksdb::Status& status, const std::string& what) {
+  return FromRocksWithMessage(status, what + ": " + status.ToString());
 }
 
 v1::CollectionInfo ToInfo(const std::string& name, const internal::CollectionRecord& record) {
@@ -176,6 +188,91 @@ Status CheckDataDirectory(const std::string& data_dir) {
   }
   if (error) return Status::IoError("cannot list the data directory " + data_dir + ": " + error.message());
   return Status::Ok();
+}
+
+// Longest backup directory path: PATH_MAX less room for what RocksDB adds
+// (".tmp" while it writes, then "/MANIFEST-" and a number, say).
+constexpr size_t kMaxBackupPathBytes = PATH_MAX - 64;
+// Longest name in it: RocksDB writes the checkpoint into "NAME.tmp" first.
+constexpr size_t kMaxBackupNameBytes = NAME_MAX - 4;
+
+// InvalidArgument if `directory` cannot name a directory: control
+// characters, longer than the system takes, or a name in it too long.
+Status CheckBackupPath(const std::string& directory) {
+  if (!std::all_of(directory.begin(), directory.end(), [](char c) { return c >= 0x20 && c != 0x7f; })) {
+    return Status::InvalidArgument("backup directory " + Quoted(directory) + " holds control characters");
+  }
+  if (directory.size() > kMaxBackupPathBytes) {
+    return Status::InvalidArgument("backup directory " + Quoted(directory) + " is " +
+                                   std::to_string(directory.size()) + " bytes long; at most " +
+                                   std::to_string(kMaxBackupPathBytes));
+  }
+  for (const std::filesystem::path& name : std::filesystem::path(directory)) {
+    if (name.native().size() > kMaxBackupNameBytes) {
+      return Status::InvalidArgument("backup directory " + Quoted(directory) + ": the name " + Quoted(name) +
+                                     " is longer than " + std::to_string(kMaxBackupNameBytes) + " bytes");
+    }
+  }
+  return Status::Ok();
+}
+
+// InvalidArgument unless `directory`'s parent exists and is outside the
+// store in `data_dir`: a copy inside the live store would be copied into the
+// next backup, and lost with the store.
+Status CheckBackupPlace(const std::string& directory, const std::string& data_dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path target(directory);
+  if (!fs::is_directory(target.parent_path(), error)) {
+    return Status::InvalidArgument("backup directory " + Quoted(directory) + ": its parent " +
+                                   Quoted(target.parent_path()) + " is not an existing directory");
+  }
+  const fs::path parent = fs::weakly_canonical(target.parent_path(), error);
+  const fs::path store = fs::weakly_canonical(data_dir, error);
+  const bool inside = std::mismatch(store.begin(), store.end(), parent.begin(), parent.end()).first == store.end();
+  if (!error && inside) {
+    return Status::InvalidArgument("backup directory " + Quoted(directory) + " is inside lmdd's data directory " +
+                                   data_dir);
+  }
+  return Status::Ok();
+}
+
+// Creates `directory` and removes it again: a directory the client chose
+// that lmdd cannot create (read-only, /proc, no permission) is refused with
+// the system's reason, as the client's to fix, before RocksDB fails on it.
+Status ProbeCreatable(const std::string& directory) {
+  if (mkdir(directory.c_str(), 0700) != 0) {
+    const int error = errno;
+    if (error == EEXIST) return Status::InvalidArgument("backup directory " + Quoted(directory) + " already exists");
+    return Status::FailedPrecondition("cannot create backup directory " + Quoted(directory) + ": " +
+                                      std::strerror(error));
+  }
+  if (rmdir(directory.c_str()) != 0) {
+    return Status::IoError("cannot remove backup directory " + Quoted(directory) + " after creating it: " +
+                           std::strerror(errno));
+  }
+  return Status::Ok();
+}
+
+// `message` with `path` quoted short wherever it stands: RocksDB's errors
+// name the backup directory, which a client may make kilobytes long (and a
+// status message goes back in a header of at most 8 KiB).
+std::string ShortenPath(std::string message, const std::string& path) {
+  const std::string quoted = Quoted(path);
+  for (size_t at = path.empty() ? std::string::npos : message.find(path); at != std::string::npos;
+       at = message.find(path, at + quoted.size())) {
+    message.replace(at, path.size(), quoted);
+  }
+  return message;
+}
+
+// A checkpoint's failure: FailedPrecondition when the backup's file system
+// is full (the client's to free), else an IoError or Corruption.
+Status CheckpointFailure(const rocksdb::Status& status, const std::string& directory) {
+  if (status.ok()) return Status::Ok();
+  const std::string message =
+      "writing the backup to " + Quoted(directory) + ": " + ShortenPath(status.ToString(), directory);
+  return status.IsNoSpace() ? Status::FailedPrecondition(message) : FromRocksWithMessage(status, message);
 }
 
 }  // namespace
@@ -1002,33 +1099,17 @@ const CollectionState* MapStore::StateOf(const std::string& collection) const {
 }
 
 Result<uint64_t> MapStore::Backup(const std::string& directory) const {
-  namespace fs = std::filesystem;
-  std::error_code error;
-  const fs::path target(directory);
-  if (!std::all_of(directory.begin(), directory.end(), [](char c) { return c >= 0x20 && c != 0x7f; })) {
-    return Status::InvalidArgument("backup directory " + Quoted(directory) + " holds control characters");
-  }
-  if (fs::exists(target, error)) {
-    return Status::InvalidArgument("backup directory " + directory + " already exists");
-  }
-  if (!fs::is_directory(target.parent_path(), error)) {
-    return Status::InvalidArgument("backup directory " + directory + ": its parent " +
-                                   target.parent_path().string() + " is not an existing directory");
-  }
-  // A copy inside the live store would be copied into the next backup, and
-  // lost with the store.
-  const fs::path parent = fs::weakly_canonical(target.parent_path(), error);
-  const fs::path store = fs::weakly_canonical(data_dir_, error);
-  const bool inside = std::mismatch(store.begin(), store.end(), parent.begin(), parent.end()).first == store.end();
-  if (!error && inside) {
-    return Status::InvalidArgument("backup directory " + directory + " is inside lmdd's data directory " + data_dir_);
-  }
+  Status status = CheckBackupPath(directory);
+  if (status.ok()) status = CheckBackupPlace(directory, data_dir_);
+  if (status.ok()) status = ProbeCreatable(directory);
+  if (!status.ok()) return status;
   rocksdb::Checkpoint* checkpoint = nullptr;
-  Status status = FromRocks(rocksdb::Checkpoint::Create(db_, &checkpoint), "preparing a backup");
+  status = FromRocks(rocksdb::Checkpoint::Create(db_, &checkpoint), "preparing a backup");
   if (!status.ok()) return status;
   std::unique_ptr<rocksdb::Checkpoint> owned(checkpoint);
-  status = FromRocks(owned->CreateCheckpoint(directory), "writing the backup to " + directory);
+  status = CheckpointFailure(owned->CreateCheckpoint(directory), directory);
   if (!status.ok()) return status;
+  std::error_code error;
   uint64_t bytes = 0;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(directory, error)) {
     if (entry.is_regular_file(error)) bytes += entry.file_size(error);

@@ -228,7 +228,11 @@ class MapStore {
 
   // Writes a consistent, openable copy of the whole store into `directory`
   // (RocksDB checkpoint: hard links where possible) and returns its size in
-  // bytes. InvalidArgument if the directory exists; IoError on failure.
+  // bytes. InvalidArgument if the directory exists, has no parent directory,
+  // lies inside the store, or its path or a name in it is longer than the
+  // system takes; FailedPrecondition if it cannot be created (read-only,
+  // /proc, permissions) or its file system is full; IoError on other
+  // failures. Messages quote the directory shortened.
   // Restore = stop lmdd and start it with --data-dir on the copy.
   Result<uint64_t> Backup(const std::string& directory) const;
 

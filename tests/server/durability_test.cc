@@ -136,6 +136,34 @@ TEST(DurabilityTest, BackupRefusesDirectoriesItCannotOrShouldNotWrite) {
   EXPECT_NE(status.error_message().find("inside lmdd's data directory"), std::string::npos) << status.error_message();
 }
 
+// A directory the client chose that the system cannot take is the client's
+// to fix, said in a short message: no INTERNAL, and no 10 KB message the
+// client could not even receive (gRPC refuses headers over 8 KiB).
+TEST(DurabilityTest, BackupRefusesPathsTheSystemCannotTakeWithShortMessages) {
+  TempDir dir;
+  TestServer server(dir.path() + "/data");
+  v1::BackupRequest request;
+  v1::BackupResponse response;
+  request.set_directory("/" + std::string(5000, 'a'));
+  grpc::Status status = server.client().Backup(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find("is 5001 bytes long; at most"), std::string::npos) << status.error_message();
+  EXPECT_LT(status.error_message().size(), 200u);
+
+  request.set_directory(dir.path() + "/" + std::string(300, 'b'));
+  status = server.client().Backup(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find("is longer than 251 bytes"), std::string::npos) << status.error_message();
+  EXPECT_LT(status.error_message().size(), 300u);
+
+  request.set_directory("/proc/lmdbk");  // mkdir fails there, even for root
+  status = server.client().Backup(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+  EXPECT_EQ(status.error_message().rfind("cannot create backup directory '/proc/lmdbk': ", 0), 0u)
+      << status.error_message();
+  EXPECT_FALSE(std::filesystem::exists("/proc/lmdbk"));
+}
+
 TEST(DurabilityTest, BackupRestoresIntoAFreshDirectory) {
   TempDir dir;
   const std::string backup = dir.path() + "/backup";
