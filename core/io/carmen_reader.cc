@@ -1,17 +1,18 @@
 #include "core/io/carmen_reader.h"
 
+#include <fcntl.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <iterator>
 #include <memory>
-#include <sstream>
 #include <string_view>
 #include <vector>
+
+#include "core/util/line_splitter.h"
 
 namespace lmd {
 namespace {
@@ -249,83 +250,101 @@ class Parser {
   size_t pose_line_ = 0;
 };
 
-}  // namespace
+// A log read as it arrives, one line at a time (never the whole file).
+class LogStream {
+ public:
+  LogStream(const std::string& name, const CarmenReadOptions& options)
+      : name_(name),
+        parser_(name, options),
+        lines_(name, kMaxLineBytes, "a CARMEN record is a few KB: is this a CARMEN text log?",
+               [this](size_t number, std::string_view text) { return parser_.Line(number, text, &log_); }) {}
 
-Result<LaserLog> ParseCarmenText(const std::string& text, const std::string& name_for_errors,
-                                 const CarmenReadOptions& options) {
-  Parser parser(name_for_errors, options);
-  LaserLog log;
-  size_t line = 0;
-  size_t pos = 0;
-  while (pos < text.size()) {
-    size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    ++line;
-    Status s = parser.Line(line, std::string_view(text.data() + pos, end - pos), &log);
+  // The next bytes of the log, in pieces of any size.
+  Status Feed(std::string_view bytes) { return lines_.Feed(bytes); }
+  Status FeedAll(std::istream& in) { return lines_.FeedAll(in); }
+
+  // The last line (if it has no newline) and the log.
+  Result<LaserLog> Finish() {
+    Status s = lines_.Finish();
     if (!s.ok()) return s;
-    pos = end + 1;
+    if (log_.scans.empty()) {
+      return Status::InvalidArgument(name_ + ":" + std::to_string(lines_.lines()) +
+                                     ": no laser record (FLASER, ROBOTLASER1, RAWLASER1) in " +
+                                     (lines_.lines() == 0 ? "an empty log" : "the log"));
+    }
+    return std::move(log_);
   }
-  if (log.scans.empty()) {
-    return Status::InvalidArgument(name_for_errors + ":" + std::to_string(line) +
-                                   ": no laser record (FLASER, ROBOTLASER1, RAWLASER1) in " +
-                                   (line == 0 ? "an empty log" : "the log"));
-  }
-  return log;
-}
 
-Result<LaserLog> ParseCarmenLog(std::istream& in, const std::string& name_for_errors,
-                                const CarmenReadOptions& options) {
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return Status::IoError(name_for_errors + ": read error");
-  return ParseCarmenText(text, name_for_errors, options);
-}
+ private:
+  // A real CARMEN line holds one record: at most about 2 KB in the nine real
+  // logs, under 2 MiB for the largest beam count accepted (kMaxBeams ranges
+  // and as many remissions). A longer "line" is not a log (binary data,
+  // /dev/zero): refusing it bounds memory.
+  static constexpr size_t kMaxLineBytes = 4 << 20;
 
-Result<LaserLog> ReadCarmenLog(const std::string& path, const CarmenReadOptions& options) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) {
+  const std::string& name_;
+  Parser parser_;
+  LaserLog log_;
+  LineSplitter lines_;
+};
+
+// The file at `path` through zlib, which reads gzip (by its magic bytes) and
+// plain files alike, fed to `log` piece by piece.
+Status StreamFile(const std::string& path, LogStream* log) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
     const int err = errno;
     const std::string msg = path + ": cannot open: " + std::strerror(err);
     return err == ENOENT ? Status::NotFound(msg) : Status::IoError(msg);
   }
-  unsigned char magic[2] = {0, 0};
-  const size_t got = std::fread(magic, 1, 2, f);
-  const bool gzip = got == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
-  std::string text;
-  if (!gzip) {
-    std::rewind(f);
-    char buf[1 << 16];
-    size_t k = 0;
-    while ((k = std::fread(buf, 1, sizeof(buf), f)) > 0) text.append(buf, k);
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) return Status::IoError(path + ": read error");
-    return ParseCarmenText(text, path, options);
+  gzFile gz = gzdopen(fd, "rb");
+  if (gz == nullptr) {
+    ::close(fd);
+    return Status::IoError(path + ": cannot open");
   }
-  std::fclose(f);
-  gzFile gz = gzopen(path.c_str(), "rb");
-  if (gz == nullptr) return Status::IoError(path + ": cannot open as gzip");
   gzbuffer(gz, 1 << 18);
   std::vector<char> buf(1 << 18);
   for (;;) {
     const int k = gzread(gz, buf.data(), static_cast<unsigned>(buf.size()));
-    if (k < 0) {
-      int errnum = 0;
-      const std::string msg = gzerror(gz, &errnum);
+    if (k <= 0) break;  // the end, or an error gzerror says below
+    Status s = log->Feed(std::string_view(buf.data(), static_cast<size_t>(k)));
+    if (!s.ok()) {
       gzclose(gz);
-      return Status::Corruption(path + ": corrupt gzip data: " + msg);
+      return s;
     }
-    if (k == 0) break;
-    text.append(buf.data(), static_cast<size_t>(k));
   }
-  int errnum = 0;
-  const char* msg = gzerror(gz, &errnum);
-  if (errnum != Z_OK) {
-    const std::string m = msg;
-    gzclose(gz);
-    return Status::Corruption(path + ": corrupt gzip data: " + m);
-  }
-  if (gzclose(gz) != Z_OK) return Status::Corruption(path + ": corrupt gzip data (bad trailer)");
-  return ParseCarmenText(text, path, options);
+  int errnum = Z_OK;
+  const std::string zmsg = gzerror(gz, &errnum);
+  const int closed = gzclose(gz);
+  if (errnum == Z_ERRNO) return Status::IoError(path + ": read error: " + zmsg);
+  if (errnum != Z_OK) return Status::Corruption(path + ": corrupt gzip data: " + zmsg);  // e.g. cut short
+  if (closed != Z_OK) return Status::Corruption(path + ": corrupt gzip data (bad trailer)");
+  return Status::Ok();
+}
+
+}  // namespace
+
+Result<LaserLog> ParseCarmenText(const std::string& text, const std::string& name_for_errors,
+                                 const CarmenReadOptions& options) {
+  LogStream log(name_for_errors, options);
+  Status s = log.Feed(text);
+  if (!s.ok()) return s;
+  return log.Finish();
+}
+
+Result<LaserLog> ParseCarmenLog(std::istream& in, const std::string& name_for_errors,
+                                const CarmenReadOptions& options) {
+  LogStream log(name_for_errors, options);
+  Status s = log.FeedAll(in);
+  if (!s.ok()) return s;
+  return log.Finish();
+}
+
+Result<LaserLog> ReadCarmenLog(const std::string& path, const CarmenReadOptions& options) {
+  LogStream log(path, options);
+  Status s = StreamFile(path, &log);
+  if (!s.ok()) return s;
+  return log.Finish();
 }
 
 }  // namespace lmd

@@ -43,14 +43,16 @@ struct CarmenReadOptions {
 // otherwise). Returns NotFound / IoError if the file cannot be opened or read,
 // Corruption for a damaged gzip stream, InvalidArgument "<path>:<line>: ..."
 // for a malformed record (wrong field count, text in a number, NaN/inf pose or
-// range, bad beam count). A file with no laser record gives an empty log.
+// range, bad beam count) or a line longer than 4 MiB (not a text log: the
+// read stops there). The file is read as a stream, one line at a time. A
+// file with no laser record is an InvalidArgument too.
 Result<LaserLog> ReadCarmenLog(const std::string& path, const CarmenReadOptions& options = {});
 
 // Same from a stream of plain text; errors name `name_for_errors`:<line>.
 Result<LaserLog> ParseCarmenLog(std::istream& in, const std::string& name_for_errors,
                                 const CarmenReadOptions& options = {});
 
-// Same from a text buffer (the whole log). Used by both functions above.
+// Same from a text buffer (the whole log).
 Result<LaserLog> ParseCarmenText(const std::string& text, const std::string& name_for_errors,
                                  const CarmenReadOptions& options = {});
 

@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <streambuf>
 #include <string>
 
 namespace lmd {
@@ -169,6 +172,44 @@ TEST(CarmenReader, RawLaserWithoutAPoseIsAnError) {
 TEST(CarmenReader, EmptyOrLaserlessLogIsAnError) {
   ExpectError(Parse(""), "test.log", "no laser record");
   ExpectError(Parse("# only\nPARAM a b\n"), "test.log:2:", "no laser record");
+}
+
+// `size` zero bytes without a newline (as /dev/zero gives), counting how
+// many of them were read.
+class ZeroBytes : public std::streambuf {
+ public:
+  explicit ZeroBytes(size_t size) : left_(size) {}
+  size_t read() const { return read_; }
+
+ protected:
+  int_type underflow() override {
+    if (left_ == 0) return traits_type::eof();
+    const size_t n = std::min(left_, buffer_.size());
+    left_ -= n;
+    read_ += n;
+    setg(buffer_.data(), buffer_.data(), buffer_.data() + n);
+    return traits_type::to_int_type(buffer_[0]);
+  }
+
+ private:
+  std::array<char, 1 << 16> buffer_{};
+  size_t left_;
+  size_t read_ = 0;
+};
+
+// `lmdctl ingest --log /dev/zero` once read until memory ran out: a line is
+// bounded, and the read stops at the first line beyond the bound.
+TEST(CarmenReader, ALineBeyondTheBoundStopsTheReadAndNamesTheLine) {
+  ZeroBytes zeros(size_t{64} << 20);
+  std::istream in(&zeros);
+  ExpectError(ParseCarmenLog(in, "zeros.log"), "zeros.log:1:", "line longer than 4 MiB");
+  EXPECT_LE(zeros.read(), size_t{5} << 20);
+  ExpectError(Parse(FlaserLine(180, 1, 0, 0, 0) + std::string(size_t{5} << 20, 'x') + "\n"), "test.log:2:",
+              "line longer than 4 MiB");
+  // A record with far more beams than any real one (20,000: about 180 KB) is no such line.
+  auto wide = Parse(FlaserLine(20000, 12.3456, 0, 0, 0));
+  ASSERT_TRUE(wide.ok()) << wide.status().ToString();
+  EXPECT_EQ(wide->scans[0].ranges.size(), 20000u);
 }
 
 TEST(CarmenReader, MissingFileIsNotFound) {

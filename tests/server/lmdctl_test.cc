@@ -118,6 +118,16 @@ TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
   EXPECT_NE(run.err.find("is a directory"), std::string::npos) << run.err;
 }
 
+// /dev/zero as a log once grew lmdctl's memory until it was killed: the
+// reader stops at a line beyond its bound, naming it, before any call.
+TEST_F(LmdctlTest, ALogWithoutNewlinesIsRefusedAtItsFirstLine) {
+  std::ofstream(dir_.path() + "/zeros.log") << std::string(size_t{6} << 20, '\0');
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 ingest --collection site --log " + dir_.path() + "/zeros.log", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("zeros.log:1: line longer than 4 MiB"), std::string::npos) << run.err;
+}
+
 TEST_F(LmdctlTest, UnreachableServerFailsCleanly) {
   CliRun run = RunLmdctl("--server 127.0.0.1:1 --timeout 2 collections", dir_);
   EXPECT_EQ(run.exit_code, 1);
