@@ -15,6 +15,7 @@
 #include <random>
 
 #include "client/cli/commands.h"
+#include "client/cli/output.h"
 #include "core/eval/ground_truth.h"
 #include "core/localmap/pose_ops.h"
 #include "core/render/result_svg.h"
@@ -22,7 +23,6 @@
 #include "core/sim/change.h"
 #include "core/sim/odometry_drift.h"
 #include "core/sim/simulate.h"
-#include "core/util/progress_bar.h"
 #include "proto/convert.h"
 
 namespace lmd::cli {
@@ -48,7 +48,7 @@ v1::InsertMapRequest ToInsert(const std::string& collection, const LocalMap& map
 }
 
 int StoreRobotOne(const CommandContext& ctx, const std::string& collection, const std::vector<LocalMap>& maps) {
-  ProgressBar progress("demo: storing robot 1's maps", maps.size());
+  ProgressBar progress = TerminalProgress("demo: storing robot 1's maps", maps.size());
   for (size_t first = 0; first < maps.size(); first += kBatch) {
     v1::InsertMapsRequest request;
     for (size_t i = first; i < std::min(maps.size(), first + kBatch); ++i) {

@@ -3,7 +3,6 @@
 #include <cstdio>
 
 #include "client/cli/output.h"
-#include "core/util/progress_bar.h"
 #include "proto/convert.h"
 
 namespace lmd::cli {
@@ -11,7 +10,7 @@ namespace lmd::cli {
 int InsertLocalMaps(const CommandContext& ctx, const std::string& collection, const std::vector<LocalMap>& maps,
                     const std::vector<Pose2>& pose_hints, const std::string& label, const std::string& robot,
                     size_t* evicted) {
-  ProgressBar progress(label, maps.size());
+  ProgressBar progress = TerminalProgress(label, maps.size());
   for (size_t i = 0; i < maps.size(); ++i) {
     v1::InsertMapsRequest request;
     v1::InsertMapRequest* insert = request.add_maps();

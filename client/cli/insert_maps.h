@@ -1,6 +1,6 @@
 // How lmdctl stores a run of local maps (ingest of a log or bag, import-map):
 // one InsertMaps call per map, so that each is acknowledged as it is stored,
-// a progress bar, and --json lines.
+// a progress bar (on a terminal), and --json lines.
 #pragma once
 
 #include <optional>

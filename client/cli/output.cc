@@ -45,4 +45,8 @@ std::string BagSummaryJsonLine(const std::string& bag, const BagLogSummary& summ
          JsonString(summary.laser_mounting) + ",\"maps\":" + std::to_string(maps) + "}";
 }
 
+ProgressBar TerminalProgress(std::string label, size_t total) {
+  return ProgressBar(std::move(label), total, stderr, ProgressBar::OffTerminal::kNothing);
+}
+
 }  // namespace lmd::cli

@@ -7,6 +7,7 @@
 #include <google/protobuf/message.h>
 
 #include "core/io/bag_log.h"
+#include "core/util/progress_bar.h"
 #include "lmd/v1/lmd.pb.h"
 
 namespace lmd::cli {
@@ -27,5 +28,9 @@ std::string EvictedJsonLine(const v1::MapMetadata& metadata);
 // "format", "scan_topic", "scans_read", "scans_without_pose", "pose_source",
 // "laser_mounting", "maps"}.
 std::string BagSummaryJsonLine(const std::string& bag, const BagLogSummary& summary, size_t maps);
+
+// A progress bar on stderr drawn only when stderr is a terminal: off one (a
+// script, a CI log) lmdctl's stderr carries nothing but its error line.
+ProgressBar TerminalProgress(std::string label, size_t total);
 
 }  // namespace lmd::cli

@@ -6,13 +6,18 @@
 
 namespace lmd {
 
-ProgressBar::ProgressBar(std::string label, size_t total, std::FILE* out)
-    : label_(std::move(label)), total_(total), out_(out), terminal_(isatty(fileno(out)) != 0) {}
+ProgressBar::ProgressBar(std::string label, size_t total, std::FILE* out, OffTerminal off_terminal)
+    : label_(std::move(label)),
+      total_(total),
+      out_(out),
+      terminal_(isatty(fileno(out)) != 0),
+      silent_(!terminal_ && off_terminal == OffTerminal::kNothing) {}
 
 ProgressBar::~ProgressBar() { Done(); }
 
 void ProgressBar::Update(size_t done) {
   done_ = std::min(done, total_);
+  if (silent_) return;
   const auto now = std::chrono::steady_clock::now();
   if (terminal_) {
     if (now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;
@@ -30,6 +35,7 @@ void ProgressBar::Update(size_t done) {
 void ProgressBar::Done() {
   if (finished_) return;
   finished_ = true;
+  if (silent_) return;
   // Off a terminal the final state may already be printed by Update.
   if (terminal_ || last_decile_ != 10 || done_ != total_) Draw(true);
 }

@@ -39,5 +39,22 @@ TEST(ProgressBarTest, DoneMarksAnUnfinishedJob) {
   EXPECT_NE(text.find("3/8"), std::string::npos) << text;
 }
 
+// lmdctl's choice: off a terminal its stderr carries only errors, so that a
+// failed ingest is one line.
+TEST(ProgressBarTest, OffATerminalItCanDrawNothing) {
+  std::FILE* file = std::tmpfile();
+  {
+    ProgressBar bar("ingest", 10, file, ProgressBar::OffTerminal::kNothing);
+    bar.Add(4);
+    bar.Abandon();
+    ProgressBar done("ingest", 10, file, ProgressBar::OffTerminal::kNothing);
+    done.Update(10);
+    done.Done();
+  }
+  const std::string text = Lines(file);
+  std::fclose(file);
+  EXPECT_EQ(text, "");
+}
+
 }  // namespace
 }  // namespace lmd

@@ -85,6 +85,7 @@ TEST_F(LmdctlBagTest, AnIngestThatLmddRefusesSaysHowManyMapsWereStored) {
   CliRun run = RunLmdctl("--server " + server.address() + " ingest --collection fleet --bag " + dir_.path() +
                              "/robot.mcap", dir_);
   EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(Lines(run.err), 1) << run.err;  // no progress lines before it: stderr is not a terminal
   EXPECT_NE(run.err.find("INVALID_ARGUMENT"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find(" maps were stored before it)"), std::string::npos) << run.err;
 }

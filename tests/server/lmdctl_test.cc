@@ -208,6 +208,17 @@ TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   EXPECT_NE(first_line.find("<svg"), std::string::npos) << first_line;
 }
 
+// Off a terminal lmdctl draws no progress (it once printed a line every
+// 10 %): a script's stderr holds an error line and nothing else.
+TEST_F(LmdctlLogTest, IngestDrawsNoProgressOffATerminal) {
+  TestServer server(data_.path());
+  CliRun ingest =
+      RunLmdctl("--server " + server.address() + " ingest --collection fleet --log " + dir_.path() + "/robot.log", dir_);
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.err;
+  EXPECT_NE(ingest.out.find("ingested "), std::string::npos) << ingest.out;
+  EXPECT_EQ(ingest.err, "");
+}
+
 TEST_F(LmdctlLogTest, PriorsAndSequencesReachLmddAndItsVerdictIsPrinted) {
   TestServer server(data_.path());
   const std::string base = "--server " + server.address() + " ";
