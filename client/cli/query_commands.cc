@@ -136,8 +136,11 @@ constexpr const char* kReducedDepthNote =
 
 int IngestCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
-  const bool bag = ctx.args.Has("bag");
-  if (collection.empty() || (bag ? Required(ctx.args, "bag") : Required(ctx.args, "log")).empty()) return 2;
+  if (collection.empty()) return 2;
+  Result<std::string> input = OneSource(ctx.args, {"log", "bag"}, "the maps to ingest", /*numbered=*/false);
+  if (!input.ok()) return Fail(input.status().message(), 2);
+  if (Required(ctx.args, *input).empty()) return 2;
+  const bool bag = *input == "bag";
   BagLogSummary summary;
   Result<std::vector<LocalMap>> maps = bag ? LocalMapsFromBag(ctx.args, &summary) : LocalMapsFromLog(ctx.args);
   if (!maps.ok()) return Fail(maps.status().message() + " (no map stored)");

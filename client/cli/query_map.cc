@@ -1,7 +1,9 @@
 #include "client/cli/query_map.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <utility>
 
 #include "client/points_file.h"
 #include "core/io/carmen_reader.h"
@@ -20,6 +22,26 @@ std::string LogName(const std::string& path) {
     }
   }
   return name;
+}
+
+Result<std::string> OneSource(const Args& args, const std::vector<std::string>& allowed, const std::string& what,
+                              bool numbered) {
+  static const std::vector<std::pair<std::string, std::string>> kSources = {
+      {"file", "--file POINTS"}, {"log", "--log FILE"}, {"bag", "--bag PATH"}};
+  std::string given, forms;
+  int count = 0;
+  for (const auto& [key, form] : kSources) {
+    const bool is_allowed = std::find(allowed.begin(), allowed.end(), key) != allowed.end();
+    if (args.Has(key)) {
+      ++count;
+      given = is_allowed ? key : "";
+    }
+    if (!is_allowed) continue;
+    forms += (forms.empty() ? " as " : " or as ") + form;
+    if (numbered && key != "file") forms += " --map K";
+  }
+  if (count != 1 || given.empty()) return Status::InvalidArgument("give " + what + forms);
+  return given;
 }
 
 namespace {
@@ -80,9 +102,8 @@ Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
   bool ignored = false;
   bool& usage = usage_error ? *usage_error : ignored;
   usage = true;
-  if (args.Has("file") + args.Has("log") + args.Has("bag") != 1) {
-    return Status::InvalidArgument("give the query map as --file POINTS or as --log FILE --map K (or --bag PATH --map K)");
-  }
+  Result<std::string> given = OneSource(args, {"file", "log", "bag"}, "the query map", /*numbered=*/true);
+  if (!given.ok()) return given.status();
   Result<long> earlier = GetPositive(args, "sequence", 1, 16);
   Result<long> spacing = GetPositive(args, "sequence-step", 5, 1000);
   if (!earlier.ok()) return earlier.status();

@@ -20,6 +20,14 @@ namespace lmd::cli {
 // and the robot an ingested log or bag is (one route).
 std::string LogName(const std::string& path);
 
+// The one input of a command among --file POINTS, --log FILE and --bag
+// PATH, those in `allowed` (e.g. {"log", "bag"}), each followed by " --map K"
+// if `numbered`: its key, or InvalidArgument "give <what> as --log FILE or
+// as --bag PATH" when none, several or another is given (a second source is
+// never silently ignored).
+Result<std::string> OneSource(const Args& args, const std::vector<std::string>& allowed, const std::string& what,
+                              bool numbered);
+
 // The local maps of the log named by --log (with --length, --step), map ids
 // "<log file name without .log/.gz>-<k>". Errors name the file and line.
 Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args);

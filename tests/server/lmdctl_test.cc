@@ -305,5 +305,18 @@ TEST_F(LmdctlLogTest, QueryNeedsExactlyOneSourceOfTheMap) {
   EXPECT_EQ(CountLines(run.err), 1) << run.err;
 }
 
+// ingest once stored a bag's maps and ignored --log beside it; like query
+// it refuses two sources (and none) with one line.
+TEST_F(LmdctlLogTest, IngestNeedsExactlyOneSourceOfTheMaps) {
+  const std::string ingest = "--server 127.0.0.1:1 ingest --collection fleet";
+  for (const std::string& sources : {" --log " + dir_.path() + "/robot.log --bag " + dir_.path() + "/robot.mcap",
+                                    std::string(), " --file " + dir_.path() + "/room.txt"}) {
+    CliRun run = RunLmdctl(ingest + sources, dir_);
+    EXPECT_EQ(run.exit_code, 2) << sources;
+    EXPECT_EQ(CountLines(run.err), 1) << sources << ": " << run.err;
+    EXPECT_NE(run.err.find("give the maps to ingest as --log FILE or as --bag PATH"), std::string::npos) << run.err;
+  }
+}
+
 }  // namespace
 }  // namespace lmd::testing
