@@ -1,11 +1,14 @@
 #include "client/lmd_client.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <string_view>
 #include <thread>
 
 #include <grpcpp/create_channel.h>
@@ -19,24 +22,54 @@ namespace {
 
 using Stub = v1::LmdService::Stub;
 
-Result<std::string> ReadPem(const std::string& path) {
+// Whether `text` holds a PEM block whose label ends with `label`
+// ("CERTIFICATE"; "PRIVATE KEY" also matches "RSA PRIVATE KEY").
+bool HasPemBlock(const std::string& text, const std::string& label) {
+  const std::string begin = "-----BEGIN ";
+  for (size_t at = text.find(begin); at != std::string::npos; at = text.find(begin, at + 1)) {
+    const size_t start = at + begin.size();
+    const size_t end = text.find("-----", start);
+    if (end == std::string::npos) return false;
+    const std::string_view found(text.data() + start, end - start);
+    if (found.size() >= label.size() && found.substr(found.size() - label.size()) == label) return true;
+  }
+  return false;
+}
+
+// The PEM file at `path` (`what` it should be, for errors), refused unless it
+// holds a `label` block: gRPC would only fail at the first call, with log
+// lines and "empty address list" that do not name the file.
+Result<std::string> ReadPem(const std::string& path, const std::string& what, const std::string& label) {
   std::ifstream in(path);
-  if (!in) return Status::InvalidArgument("cannot read " + path);
+  if (!in) return Status::InvalidArgument("cannot read the " + what + " file " + path + ": " + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
+  if (!in.good() && !in.eof()) return Status::InvalidArgument("cannot read the " + what + " file " + path);
+  if (!HasPemBlock(text.str(), label)) {
+    return Status::InvalidArgument("the " + what + " file " + path + " holds no PEM " + label +
+                                   " (-----BEGIN " + label + "-----)");
+  }
   return text.str();
 }
 
 Result<std::shared_ptr<grpc::ChannelCredentials>> MakeCredentials(const ClientOptions& options) {
-  if (options.tls_root_ca_file.empty()) return grpc::InsecureChannelCredentials();
+  if (options.tls_cert_file.empty() != options.tls_key_file.empty()) {
+    return Status::InvalidArgument("a TLS client certificate (tls_cert_file) and its key (tls_key_file) go together");
+  }
+  if (options.tls_root_ca_file.empty()) {
+    if (!options.tls_cert_file.empty()) {
+      return Status::InvalidArgument("a TLS client certificate needs tls_root_ca_file, which turns TLS on");
+    }
+    return grpc::InsecureChannelCredentials();
+  }
   grpc::SslCredentialsOptions ssl;
-  Result<std::string> ca = ReadPem(options.tls_root_ca_file);
+  Result<std::string> ca = ReadPem(options.tls_root_ca_file, "TLS CA certificate", "CERTIFICATE");
   if (!ca.ok()) return ca.status();
   ssl.pem_root_certs = *ca;
   if (!options.tls_cert_file.empty()) {
-    Result<std::string> cert = ReadPem(options.tls_cert_file);
+    Result<std::string> cert = ReadPem(options.tls_cert_file, "TLS client certificate", "CERTIFICATE");
     if (!cert.ok()) return cert.status();
-    Result<std::string> key = ReadPem(options.tls_key_file);
+    Result<std::string> key = ReadPem(options.tls_key_file, "TLS client key", "PRIVATE KEY");
     if (!key.ok()) return key.status();
     ssl.pem_cert_chain = *cert;
     ssl.pem_private_key = *key;

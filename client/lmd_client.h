@@ -49,7 +49,8 @@ struct ClientOptions {
   // Bearer token sent as "authorization: Bearer TOKEN"; empty: none.
   std::string token;
   // TLS: on when tls_root_ca_file is set (PEM of the CA that signed lmdd's
-  // certificate). A client certificate and key (PEM) if lmdd requires one.
+  // certificate). A client certificate and key (PEM) if lmdd requires one:
+  // both or neither, and only with the CA file.
   std::string tls_root_ca_file;
   std::string tls_cert_file;
   std::string tls_key_file;
@@ -71,7 +72,9 @@ struct ClientOptions {
 class LmdClient {
  public:
   // InvalidArgument if the target is not HOST:PORT with a port from 1 to
-  // 65535, a TLS file cannot be read or the token is not printable ASCII.
+  // 65535, a TLS file cannot be read or holds no PEM block of its kind, a
+  // client certificate comes without its key (or either without the CA
+  // file), or the token is not printable ASCII.
   static Result<std::unique_ptr<LmdClient>> Create(const ClientOptions& options);
 
   grpc::Status InsertMaps(const v1::InsertMapsRequest& request, v1::InsertMapsResponse* response) const;

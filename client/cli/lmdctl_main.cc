@@ -65,6 +65,19 @@ const std::map<std::string, Command>& Commands() {
   return commands;
 }
 
+// --tls-cert and --tls-key go together, and with the --tls-ca that turns
+// TLS on: alone, a flag was ignored or read as an empty file name.
+Status CheckTlsFlags(const Args& args) {
+  if (args.Has("tls-cert") && !args.Has("tls-key")) return Status::InvalidArgument("--tls-cert needs --tls-key");
+  if (args.Has("tls-key") && !args.Has("tls-cert")) return Status::InvalidArgument("--tls-key needs --tls-cert");
+  for (const char* flag : {"tls-cert", "tls-server-name"}) {
+    if (args.Has(flag) && !args.Has("tls-ca")) {
+      return Status::InvalidArgument(std::string("--") + flag + " needs --tls-ca (the CA of lmdd's certificate)");
+    }
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 int Fail(const std::string& message, int code) {
@@ -110,6 +123,8 @@ int Main(int argc, char** argv) {
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);
+  const Status tls = CheckTlsFlags(*args);
+  if (!tls.ok()) return Fail(tls.message(), 2);
 
   client::ClientOptions options;
   options.target = args->Get("server", "127.0.0.1:50051");

@@ -88,6 +88,33 @@ TEST_F(LmdctlTest, TyposAndOutOfRangeNumbersAreUsageErrors) {
   EXPECT_NE(wrapped.err.find("--top-k must be a whole number from 1 to"), std::string::npos) << wrapped.err;
 }
 
+// A bad CA file once showed as gRPC log lines and "UNAVAILABLE: empty
+// address list", and a certificate without its key as "cannot read " (no
+// name): each now says which file or flag is wrong, before any call.
+TEST_F(LmdctlTest, BadTlsFilesAndFlagsAreNamed) {
+  const std::string garbage = dir_.path() + "/garbage.pem";
+  std::ofstream(garbage) << "not a certificate\n";
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 --tls-ca " + garbage + " collections", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("the TLS CA certificate file " + garbage + " holds no PEM CERTIFICATE"), std::string::npos)
+      << run.err;
+  run = RunLmdctl("--server 127.0.0.1:1 --tls-ca " + dir_.path() + "/none.pem collections", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("cannot read the TLS CA certificate file " + dir_.path() + "/none.pem: No such file"),
+            std::string::npos)
+      << run.err;
+  const std::string pairs[][2] = {{"--tls-ca " + garbage + " --tls-cert x.pem", "--tls-cert needs --tls-key"},
+                                  {"--tls-ca " + garbage + " --tls-key x.key", "--tls-key needs --tls-cert"},
+                                  {"--tls-cert x.pem --tls-key x.key", "--tls-cert needs --tls-ca"}};
+  for (const auto& [flags, message] : pairs) {
+    run = RunLmdctl("--server 127.0.0.1:1 " + flags + " collections", dir_);
+    EXPECT_EQ(run.exit_code, 2) << flags;
+    EXPECT_EQ(CountLines(run.err), 1) << run.err;
+    EXPECT_NE(run.err.find("lmdctl: " + message), std::string::npos) << run.err;
+  }
+}
+
 TEST_F(LmdctlTest, ANameThatCannotBeAHeaderIsRefusedNotACrash) {
   TestServer server(data_.path());
   // popen runs /bin/sh (dash): printf makes the bytes (UTF-8 e acute, a tab).
