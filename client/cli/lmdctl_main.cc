@@ -1,5 +1,6 @@
 // lmdctl: the command-line tool for lmdd.
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <new>
 
@@ -46,7 +47,8 @@ constexpr char kUsage[] =
     "their relative poses from the route, so that a look-alike place must fit the whole sequence;\n"
     "--length / --step (m) change the local maps built from a log (5 and 1).\n"
     "--route (in a cluster) sends calls straight to the collection's primary or an in-sync copy, not via --server.\n"
-    "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage).\n";
+    "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage);\n"
+    "GRPC_VERBOSITY=ERROR adds gRPC's own log lines (lmdctl keeps them off).\n";
 
 using Command = int (*)(const CommandContext&);
 
@@ -106,6 +108,9 @@ std::string Required(const Args& args, const std::string& key) {
 }
 
 int Main(int argc, char** argv) {
+  // gRPC logs failures on stderr itself (E... lines before lmdctl's own):
+  // off unless the user sets GRPC_VERBOSITY, so that an error is one line.
+  setenv("GRPC_VERBOSITY", "NONE", /*overwrite=*/0);
   Result<Args> args = ParseArgs(argc, argv, 1, {"json", "help", "h", "scan-matching", "allow-nan", "salvage", "anchor", "fall-back", "route"});
   if (!args.ok()) return Fail(args.status().message(), 2);
   if (args->Switch("help") || args->Switch("h") || args->positional.empty()) {

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sys/wait.h>
 
@@ -113,6 +114,22 @@ TEST_F(LmdctlTest, BadTlsFilesAndFlagsAreNamed) {
     EXPECT_EQ(CountLines(run.err), 1) << run.err;
     EXPECT_NE(run.err.find("lmdctl: " + message), std::string::npos) << run.err;
   }
+}
+
+// A CA file that looks like PEM but is not a certificate fails inside
+// gRPC, which logged four "E..." lines of its own before lmdctl's error.
+TEST_F(LmdctlTest, AFailedCallIsOneLineWithoutGrpcsOwnLog) {
+  const std::string ca = dir_.path() + "/bad-ca.pem";
+  std::ofstream(ca) << "-----BEGIN CERTIFICATE-----\nAAAA\n-----END CERTIFICATE-----\n";
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 --timeout 2 --tls-ca " + ca + " collections", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_EQ(run.err.rfind("lmdctl: UNAVAILABLE", 0), 0u) << run.err;
+  // Asked for, gRPC's lines are back.
+  setenv("GRPC_VERBOSITY", "ERROR", 1);
+  run = RunLmdctl("--server 127.0.0.1:1 --timeout 2 --tls-ca " + ca + " collections", dir_);
+  unsetenv("GRPC_VERBOSITY");
+  EXPECT_GT(CountLines(run.err), 1) << run.err;
 }
 
 TEST_F(LmdctlTest, ANameThatCannotBeAHeaderIsRefusedNotACrash) {
