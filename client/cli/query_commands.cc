@@ -243,8 +243,10 @@ int RenderCommand(const CommandContext& ctx) {
   v1::DetectChangesResponse response;
   grpc::Status status = ctx.client.DetectChanges(request, &response);
   if (!status.ok()) return FailCall(status);
-  if (response.hits_size() == 0 || !response.hits(0).hit().has_pose()) {
-    return Fail("no hit with a pose to render (method bow gives none)");
+  if (response.hits_size() == 0) return Fail("no map of '" + request.collection() + "' matches: nothing to render");
+  if (!response.hits(0).hit().has_pose()) {
+    return Fail("the top hit of method " + ctx.args.Get("method", "default") +
+                " has no pose to render (the default method gives one)");
   }
   const v1::ChangeHit& top = response.hits(0);
   v1::GetMapRequest get;

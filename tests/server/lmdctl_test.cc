@@ -263,6 +263,26 @@ TEST_F(LmdctlLogTest, IngestDrawsNoProgressOffATerminal) {
   EXPECT_EQ(ingest.err, "");
 }
 
+// render once said "(method bow gives none)" when the default method found
+// no hit: it says there is no hit, or names the method it used.
+TEST_F(LmdctlLogTest, RenderWithoutAPoseSaysWhyNamingTheMethodUsed) {
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  const std::string log = dir_.path() + "/robot.log";
+  ASSERT_EQ(RunLmdctl(base + "ingest --collection fleet --log " + log, dir_).exit_code, 0);
+  std::ofstream(dir_.path() + "/room.txt") << "0 0\n1 0\n1 1\n0 1\n";  // too small a map to match anything
+  ASSERT_EQ(RunLmdctl(base + "insert --collection rooms --file " + dir_.path() + "/room.txt", dir_).exit_code, 0);
+  CliRun none = RunLmdctl(base + "render --collection rooms --log " + log + " --map 4 --out " + dir_.path() +
+                              "/none.svg", dir_);
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_EQ(CountLines(none.err), 1) << none.err;
+  EXPECT_NE(none.err.find("no map of 'rooms' matches: nothing to render"), std::string::npos) << none.err;
+  CliRun bow = RunLmdctl(base + "render --collection fleet --method bow --log " + log + " --map 4 --out " +
+                             dir_.path() + "/bow.svg", dir_);
+  EXPECT_EQ(bow.exit_code, 1);
+  EXPECT_NE(bow.err.find("the top hit of method bow has no pose to render"), std::string::npos) << bow.err;
+}
+
 TEST_F(LmdctlLogTest, PriorsAndSequencesReachLmddAndItsVerdictIsPrinted) {
   TestServer server(data_.path());
   const std::string base = "--server " + server.address() + " ";
