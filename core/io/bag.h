@@ -40,7 +40,9 @@ struct BagReadOptions {
   // refused as corrupt. Real chunks hold 1-4 MiB (MCAP's and rosbag's defaults).
   uint64_t max_chunk_bytes = 256ull << 20;
   // A file that ends inside a record (a recorder killed mid-write) is an
-  // error naming the offset; true reads the complete records before it.
+  // error naming the offset; true reads the complete records before it
+  // (MCAP: also those of an uncompressed chunk the cut falls in), and is
+  // Corruption still when they hold no topic.
   bool salvage_truncated = false;
 };
 

@@ -45,6 +45,10 @@ class McapReader : public BagReader {
     f += chunk_compressions_.empty() ? ", unchunked" : ", chunks:";
     for (const std::string& c : chunk_compressions_) f += " " + c;
     f += has_summary_ ? ", summary" : ", no summary (scanned)";
+    if (cut_at_ != kNotCut) {
+      f += ", cut short in the record at offset " + std::to_string(cut_at_) +
+           " (the complete records before the cut salvaged)";
+    }
     return f;
   }
   const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
@@ -198,12 +202,7 @@ class McapReader : public BagReader {
     }
     uint64_t index_length = 0;
     std::string_view compression;
-    if (in.U64(&index_length) && in.PrefixedU32(&compression)) {
-      const std::string name = compression.empty() ? "none" : std::string(compression);
-      if (std::find(chunk_compressions_.begin(), chunk_compressions_.end(), name) == chunk_compressions_.end()) {
-        chunk_compressions_.push_back(name);
-      }
-    }
+    if (in.U64(&index_length) && in.PrefixedU32(&compression)) NoteCompression(compression);
     chunks_.push_back(std::move(ref));
     return Status::Ok();
   }
@@ -245,10 +244,7 @@ class McapReader : public BagReader {
     else if (compression == "zstd") codec = Compression::kZstd;
     else if (compression == "lz4") codec = Compression::kLz4Frame;
     else return Error(at, "chunk has unknown compression '" + std::string(compression) + "' (known: zstd, lz4, none)");
-    const std::string name = compression.empty() ? "none" : std::string(compression);
-    if (std::find(chunk_compressions_.begin(), chunk_compressions_.end(), name) == chunk_compressions_.end()) {
-      chunk_compressions_.push_back(name);
-    }
+    NoteCompression(compression);
     std::string_view data = records;
     if (codec != Compression::kNone || records.size() != uncompressed_size) {
       Status s = Decompress(codec, records, uncompressed_size, options_.max_chunk_bytes,
@@ -260,6 +256,37 @@ class McapReader : public BagReader {
       return Error(at, "chunk CRC mismatch (recorded " + std::to_string(crc) + ", computed " +
                            std::to_string(Crc32(data)) + ")");
     }
+    return ChunkRecords(data, at, /*cut=*/false, channels, on_message);
+  }
+
+  // The complete records of a chunk the file's end cuts short (`head` = the
+  // chunk's body up to the end of the file). Only an uncompressed chunk's
+  // records can be read without the rest; its CRC cannot be checked.
+  Status CutChunk(std::string_view head, uint64_t at, const std::set<uint16_t>& channels,
+                  const std::function<Status(const BagMessage&)>* on_message) {
+    ByteCursor in(head, at + kRecordHead);
+    uint64_t start_time = 0, end_time = 0, uncompressed_size = 0, records_size = 0;
+    uint32_t crc = 0;
+    std::string_view compression;
+    if (!in.U64(&start_time) || !in.U64(&end_time) || !in.U64(&uncompressed_size) || !in.U32(&crc) ||
+        !in.PrefixedU32(&compression) || !in.U64(&records_size) || !compression.empty()) {
+      return Status::Ok();
+    }
+    NoteCompression(compression);
+    return ChunkRecords(in.Rest(), at, /*cut=*/true, channels, on_message);
+  }
+
+  void NoteCompression(std::string_view compression) {
+    const std::string name = compression.empty() ? "none" : std::string(compression);
+    if (std::find(chunk_compressions_.begin(), chunk_compressions_.end(), name) == chunk_compressions_.end()) {
+      chunk_compressions_.push_back(name);
+    }
+  }
+
+  // The records of a chunk's (uncompressed) data; `cut`: the data ends
+  // inside a record, and the records before it are read.
+  Status ChunkRecords(std::string_view data, uint64_t at, bool cut, const std::set<uint16_t>& channels,
+                      const std::function<Status(const BagMessage&)>* on_message) {
     ByteCursor r(data);
     while (!r.done()) {
       const uint64_t inner = r.pos();
@@ -267,6 +294,7 @@ class McapReader : public BagReader {
       uint64_t len = 0;
       std::string_view rec;
       if (!r.U8(&op) || !r.U64(&len) || len > r.left() || !r.Bytes(static_cast<size_t>(len), &rec)) {
+        if (cut) return Status::Ok();
         return Error(at, "record at byte " + std::to_string(inner) + " of the chunk runs past its end");
       }
       Status s = Record(op, rec, at, inner, channels, on_message);
@@ -318,7 +346,7 @@ class McapReader : public BagReader {
     std::string head, body;
     while (at < size) {
       if (size - at < kRecordHead) {
-        if (options_.salvage_truncated) break;
+        if (options_.salvage_truncated) return SalvageCut(at, 0, channels, on_message);
         return Error(at, "truncated: " + std::to_string(size - at) + " bytes left, a record needs 9 (file cut short?)");
       }
       Status s = source_->Read(at, kRecordHead, "a record header", &head);
@@ -328,7 +356,7 @@ class McapReader : public BagReader {
       uint64_t len = 0;
       h.U8(&op), h.U64(&len);
       if (len > size - at - kRecordHead) {
-        if (options_.salvage_truncated) break;
+        if (options_.salvage_truncated) return SalvageCut(at, op, channels, on_message);
         return Error(at, "truncated: record (opcode " + std::to_string(op) + ") declares " + std::to_string(len) +
                              " bytes, " + std::to_string(size - at - kRecordHead) + " are left (file cut short?)");
       }
@@ -360,7 +388,23 @@ class McapReader : public BagReader {
     return Status::Ok();
   }
 
+  // The file ends inside the record at `at` (opcode `op`): the records
+  // before it are read; so are the complete ones of an uncompressed chunk.
+  Status SalvageCut(uint64_t at, uint8_t op, const std::set<uint16_t>& channels,
+                    const std::function<Status(const BagMessage&)>* on_message) {
+    cut_at_ = at;
+    if (op != kChunk) return Status::Ok();
+    std::string head;
+    Status s = source_->Read(at + kRecordHead, source_->size() - at - kRecordHead, "a cut-off chunk", &head);
+    if (!s.ok()) return s;
+    return CutChunk(head, at, channels, on_message);
+  }
+
   Status BuildTopics() {
+    if (cut_at_ != kNotCut && channels_.empty()) {
+      return Error(cut_at_, "truncated (file cut short?): no complete channel record before the cut, so nothing "
+                            "could be salvaged");
+    }
     if (counts_.empty()) counts_ = scanned_counts_;
     for (const auto& [id, channel] : channels_) {
       const auto schema = schemas_.find(channel.schema);
@@ -376,12 +420,14 @@ class McapReader : public BagReader {
     uint16_t schema = 0;
   };
   static constexpr uint64_t kNoChunk = ~0ull;
+  static constexpr uint64_t kNotCut = ~0ull;
 
   std::unique_ptr<ByteSource> source_;
   BagReadOptions options_;
   std::string profile_;
   bool has_summary_ = false;
   bool channels_from_summary_ = false;
+  uint64_t cut_at_ = kNotCut;  // where a salvaged file ends inside a record
   std::map<uint16_t, uint64_t> scanned_counts_;
   std::map<uint16_t, std::string> schemas_;
   std::map<uint16_t, Channel> channels_;

@@ -177,6 +177,44 @@ TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
   ExpectSameLog(head, *log);
 }
 
+// intel.mcap cut at 800 KB ends inside its first chunk (uncompressed, 1 MB):
+// salvage once found no channel there and said "no sensor_msgs/LaserScan
+// topic; the bag's 0 topics". The complete records before the cut are read.
+TEST(BagReaderTest, SalvageReadsTheCompleteRecordsOfTheUncompressedChunkACutFallsIn) {
+  const std::string full = McapBytes(BagFromLog(ShortLog(), MessageEncoding::kCdr));  // one uncompressed chunk
+  const std::string cut = full.substr(0, full.size() / 2);
+  BagLogOptions salvage;
+  salvage.read.salvage_truncated = true;
+  BagLogSummary summary;
+  Result<LaserLog> log = ReadBytesAsMcap(cut, salvage, &summary);
+  ASSERT_TRUE(log.ok()) << log.status().ToString();
+  ASSERT_GT(log->scans.size(), 10u);
+  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
+  LaserLog head = ShortLog();
+  head.scans.resize(log->scans.size());
+  ExpectSameLog(head, *log);
+  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+}
+
+// A compressed chunk cannot be read in part: when the cut leaves nothing
+// before it, salvage says so instead of listing the bag's 0 topics.
+TEST(BagReaderTest, SalvageThatRecoversNothingSaysTheFileIsCut) {
+  McapWriteOptions zstd;
+  zstd.compression = Compression::kZstd;
+  const std::string full = McapBytes(BagFromLog(ShortLog(), MessageEncoding::kCdr), zstd);
+  BagLogOptions salvage;
+  salvage.read.salvage_truncated = true;
+  Result<LaserLog> log = ReadBytesAsMcap(full.substr(0, full.size() / 2), salvage);
+  ASSERT_FALSE(log.ok());
+  const std::string message = log.status().message();
+  EXPECT_EQ(log.status().code(), Status::Code::kCorruption) << message;
+  EXPECT_EQ(message.rfind("test.mcap: offset ", 0), 0u) << message;
+  EXPECT_NE(message.find(": truncated (file cut short?): no complete channel record before the cut, so nothing could "
+                         "be salvaged"),
+            std::string::npos)
+      << message;
+}
+
 TEST(BagReaderTest, EveryRos1BagVariantReadsBackTheLog) {
   const TestBag bag = BagFromLog(ShortLog(), MessageEncoding::kRos1);
   struct Variant {
