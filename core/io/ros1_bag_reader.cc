@@ -67,6 +67,10 @@ class Ros1BagReader : public BagReader {
     f += compressions_.empty() ? "" : ", chunks:";
     for (const std::string& c : compressions_) f += " " + c;
     f += indexed_ ? ", indexed" : ", unindexed (walked)";
+    if (cut_at_ != kNotCut) {
+      f += ", cut short in the record at offset " + std::to_string(cut_at_) +
+           " (the complete records before the cut salvaged)";
+    }
     return f;
   }
   const std::vector<BagTopic>& topics() const override { return topics_.topics(); }
@@ -91,9 +95,12 @@ class Ros1BagReader : public BagReader {
       return Error(kMagicSize, "the first record is not a bag header with an index_pos");
     }
     data_start_ = bag_header.end;
+    // An index beyond the end: the file was cut short; salvage walks the records before the cut.
+    if (index_pos >= source_->size() && options_.salvage_truncated) index_pos = 0;
     if (index_pos != 0) {
       if (index_pos < data_start_ || index_pos >= source_->size()) {
-        return Error(kMagicSize, "bag header's index_pos " + std::to_string(index_pos) + " lies outside the file");
+        return Error(kMagicSize, "bag header's index_pos " + std::to_string(index_pos) + " lies outside the file" +
+                                     (index_pos >= source_->size() ? " (file cut short?)" : ""));
       }
       s = ReadIndex(index_pos);
       if (!s.ok()) return s;
@@ -102,8 +109,7 @@ class Ros1BagReader : public BagReader {
       s = Walk({}, nullptr);
       if (!s.ok()) return s;
     }
-    BuildTopics();
-    return Status::Ok();
+    return BuildTopics();
   }
 
   Status ReadMessages(const std::vector<size_t>& wanted,
@@ -284,7 +290,10 @@ class Ros1BagReader : public BagReader {
       Record r;
       Status s = ReadRecord(at, &r, /*count_sized_index=*/true);
       if (!s.ok()) {
-        if (options_.salvage_truncated && s.code() == Status::Code::kCorruption) break;
+        if (options_.salvage_truncated && s.code() == Status::Code::kCorruption) {
+          cut_at_ = at;
+          break;
+        }
         return s;
       }
       uint8_t op = 0;
@@ -302,22 +311,29 @@ class Ros1BagReader : public BagReader {
     return Status::Ok();
   }
 
-  void BuildTopics() {
+  Status BuildTopics() {
+    if (cut_at_ != kNotCut && connections_.empty()) {
+      return Error(cut_at_, "truncated (file cut short?): no complete connection record before the cut, so "
+                            "nothing could be salvaged");
+    }
     if (counts_.empty()) counts_ = walked_counts_;
     for (const auto& [conn, c] : connections_) {
       const auto n = counts_.find(conn);
       conn_topic_[conn] = topics_.Add(c.topic, c.type, "ros1", n == counts_.end() ? 0 : n->second);
     }
+    return Status::Ok();
   }
 
   struct Conn {
     std::string topic, type;
   };
+  static constexpr uint64_t kNotCut = ~0ull;
 
   std::unique_ptr<ByteSource> source_;
   BagReadOptions options_;
   uint64_t data_start_ = 0;
   bool indexed_ = false;
+  uint64_t cut_at_ = kNotCut;  // where a salvaged file ends inside a record
   std::map<uint32_t, Conn> connections_;
   std::map<uint32_t, uint64_t> counts_, walked_counts_;
   std::map<uint32_t, size_t> conn_topic_;

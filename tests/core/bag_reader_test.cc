@@ -249,6 +249,37 @@ TEST(BagReaderTest, EveryRos1BagVariantReadsBackTheLog) {
   }
 }
 
+// A finished ROS 1 bag cut short keeps a bag header whose index_pos lies
+// beyond the cut: salvage once refused it like any damaged header; it walks
+// the records before the cut, and says so when they hold nothing.
+TEST(BagReaderTest, SalvageWalksARos1BagWhoseIndexIsCutOff) {
+  const std::string full = Ros1BagBytes(BagFromLog(ShortLog(), MessageEncoding::kRos1));
+  const std::string cut = full.substr(0, full.size() / 2);
+  Result<LaserLog> refused = ReadBytesAsRos1(cut);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("lies outside the file (file cut short?)"), std::string::npos)
+      << refused.status().message();
+  BagLogOptions salvage;
+  salvage.read.salvage_truncated = true;
+  BagLogSummary summary;
+  Result<LaserLog> log = ReadBytesAsRos1(cut, salvage, &summary);
+  ASSERT_TRUE(log.ok()) << log.status().ToString();
+  ASSERT_GT(log->scans.size(), 10u);
+  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
+  LaserLog head = ShortLog();
+  head.scans.resize(log->scans.size());
+  ExpectSameLog(head, *log);
+  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+
+  Result<LaserLog> nothing = ReadBytesAsRos1(full.substr(0, 5000), salvage);  // inside the first chunk
+  ASSERT_FALSE(nothing.ok());
+  EXPECT_EQ(nothing.status().code(), Status::Code::kCorruption);
+  EXPECT_NE(nothing.status().message().find("no complete connection record before the cut, so nothing could be "
+                                            "salvaged"),
+            std::string::npos)
+      << nothing.status().message();
+}
+
 TEST(BagReaderTest, Rosbag2SqliteFilesAndDirectoriesReadBackTheLog) {
   TempFolder dir;
   const TestBag bag = BagFromLog(ShortLog(), MessageEncoding::kCdr);
