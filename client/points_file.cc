@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "core/util/quoted.h"
+
 namespace lmd::client {
 namespace {
 
@@ -47,7 +49,7 @@ Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
     }
     std::istringstream point(line);
     if (!ReadNumbers(point, 2, values)) {
-      return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got '" + line + "'");
+      return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got " + Quoted(line));
     }
     // Points travel as floats: a larger value would arrive infinite.
     if (std::fabs(values[0]) > std::numeric_limits<float>::max() ||

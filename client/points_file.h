@@ -15,7 +15,8 @@
 namespace lmd::client {
 
 // IoError if the file cannot be read; InvalidArgument naming file:line for a
-// malformed line or a non-finite number, or if the file holds no point.
+// malformed line (quoting at most 80 characters of it, escaped) or a
+// non-finite number, or if the file holds no point.
 Result<v1::LocalMap> ReadPointsFile(const std::string& path);
 
 // Writes `map` in the format above. IoError if the file cannot be written.

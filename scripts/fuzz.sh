@@ -35,7 +35,7 @@ sanitize=(-fsanitize=address,undefined -fno-sanitize-recover=undefined)
 libs=(-lzstd -llz4 -lbz2 -lsqlite3 -lz)
 io=(core/status.cc core/io/byte_source.cc core/io/compression.cc core/io/mcap_reader.cc core/io/ros1_bag_reader.cc
     core/io/rosbag2_sqlite_reader.cc core/io/ros_messages.cc core/io/bag.cc core/io/carmen_reader.cc
-    core/util/line_splitter.cc)
+    core/util/line_splitter.cc core/util/quoted.cc)
 mkdir -p "$out/obj" "$out/artifacts"
 
 echo "fuzz: building in $out"

@@ -6,15 +6,11 @@
 #include <string>
 
 #include "core/status.h"
+#include "core/util/quoted.h"  // Quoted, for the messages of validation and its callers
 #include "lmd/v1/lmd.pb.h"
 #include "server/config.h"
 
 namespace lmd::server {
-
-// `value` in single quotes for a message or log line, bytes outside
-// printable ASCII (and the backslash) escaped as \xNN, cut after 80
-// characters: a client's bytes must not forge log lines.
-std::string Quoted(const std::string& value);
 
 // 1 to 64 characters from [A-Za-z0-9._-], not only dots. InvalidArgument otherwise.
 Status ValidateCollectionName(const std::string& name);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/util/line_splitter.h"
+#include "core/util/quoted.h"
 
 namespace lmd {
 namespace {
@@ -80,10 +81,10 @@ class Parser {
                 double* v) const {
     if (i >= t.size()) return Error(line, std::string("missing ") + what);
     if (!ParseDouble(t[i], v)) {
-      return Error(line, std::string(what) + " is not a number: '" + std::string(t[i]) + "'");
+      return Error(line, std::string(what) + " is not a number: " + Quoted(t[i]));
     }
     if (!std::isfinite(*v)) {
-      return Error(line, std::string(what) + " is not finite: '" + std::string(t[i]) + "'");
+      return Error(line, std::string(what) + " is not finite: " + Quoted(t[i]));
     }
     return Status::Ok();
   }
@@ -92,7 +93,7 @@ class Parser {
                long min_value, long* v) const {
     if (i >= t.size()) return Error(line, std::string("missing ") + what);
     if (!ParseInt(t[i], v)) {
-      return Error(line, std::string(what) + " is not an integer: '" + std::string(t[i]) + "'");
+      return Error(line, std::string(what) + " is not an integer: " + Quoted(t[i]));
     }
     if (*v < min_value || *v > kMaxBeams) {
       return Error(line, std::string(what) + " out of range [" + std::to_string(min_value) + ", " +
@@ -110,7 +111,7 @@ class Parser {
                           ") is more than 1e6 m from the origin");
     }
     if (s.ok() && std::abs(pose->theta) > kMaxPoseTheta) {
-      s = Error(line, "pose theta is not an angle: '" + std::string(t[i + 2]) + "'");
+      s = Error(line, "pose theta is not an angle: " + Quoted(t[i + 2]));
     }
     return s;
   }
@@ -122,8 +123,8 @@ class Parser {
     for (long k = 0; k < n; ++k) {
       double r = 0.0;
       if (!ParseDouble(t[i + static_cast<size_t>(k)], &r)) {
-        return Error(line, "range " + std::to_string(k + 1) + " is not a number: '" +
-                               std::string(t[i + static_cast<size_t>(k)]) + "'");
+        return Error(line, "range " + std::to_string(k + 1) + " is not a number: " +
+                               Quoted(t[i + static_cast<size_t>(k)]));
       }
       if (!std::isfinite(r)) {
         return Error(line, "range " + std::to_string(k + 1) + " is not finite");

@@ -136,6 +136,15 @@ TEST(CarmenReader, TextInANumberNamesTheField) {
   ExpectError(Parse(line), "test.log:1:", "not a number: '1x'");
 }
 
+// A binary token once came back whole (up to a 4 MiB line) in the message.
+TEST(CarmenReader, ABinaryTokenIsQuotedShortAndEscaped) {
+  const std::string binary(1000, '\x80');
+  auto r = Parse("FLASER " + binary + " 1 2 3\n");
+  ExpectError(r, "test.log:1:", "FLASER beam count is not an integer: '\\x80\\x80");
+  EXPECT_LT(r.status().message().size(), 500u) << r.status().message();
+  EXPECT_NE(r.status().message().find("...'"), std::string::npos) << r.status().message();
+}
+
 TEST(CarmenReader, RobotLaserWithoutAPositiveResolutionIsAnError) {
   ExpectError(Parse("ROBOTLASER1 0 -1.5 3.0 0 20 0.01 0 5 1 2 3 4 25 0 7 8 0.25 0 0 0 0 0 0 0 0 1.0 h 1.0\n"),
               "test.log:1:", "angular resolution must be in (0, pi]");

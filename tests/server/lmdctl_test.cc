@@ -1,5 +1,6 @@
 // lmdctl as a user runs it: exit codes, one line on stderr for errors, and
 // one JSON object per line with --json.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -143,6 +144,23 @@ TEST_F(LmdctlTest, ANameThatCannotBeAHeaderIsRefusedNotACrash) {
   CliRun token = RunLmdctl("--server " + server.address() + " --token \"$(printf 't\\303\\266k')\" collections", dir_);
   EXPECT_EQ(token.exit_code, 1) << token.err;
   EXPECT_NE(token.err.find("printable ASCII"), std::string::npos) << token.err;
+}
+
+// A points file of binary bytes once had its line echoed raw on stderr: it
+// is quoted short and escaped.
+TEST_F(LmdctlTest, ABinaryPointsLineIsQuotedShortAndEscaped) {
+  std::string bytes = "0 0\n";
+  for (int i = 0; i < 300; ++i) bytes += static_cast<char>(0x80 + i % 100);
+  std::ofstream(dir_.path() + "/binary.txt") << bytes << "\n";
+  const std::string insert = "--server 127.0.0.1:1 insert --collection site --file " + dir_.path();
+  CliRun run = RunLmdctl(insert + "/binary.txt", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("binary.txt:2: expected 'x y' with finite numbers, got '\\x80\\x81"), std::string::npos)
+      << run.err;
+  EXPECT_LT(run.err.size(), 600u) << run.err;  // 80 bytes shown, as \xNN
+  EXPECT_TRUE(std::all_of(run.err.begin(), run.err.end(), [](char c) { return c == '\n' || (c >= 0x20 && c < 0x7f); }))
+      << run.err;
 }
 
 TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
