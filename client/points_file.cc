@@ -5,7 +5,9 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <string_view>
 
+#include "core/util/line_splitter.h"
 #include "core/util/quoted.h"
 
 namespace lmd::client {
@@ -20,6 +22,43 @@ bool ReadNumbers(std::istringstream& in, int count, double* out) {
   return !(in >> rest);
 }
 
+// A points line is "x y" or "pose x y theta" with perhaps a comment; a
+// longer one is not a points file (binary data, /dev/zero, which once grew
+// lmdctl's memory for ever): refusing it bounds memory.
+constexpr size_t kMaxLineBytes = 64 << 10;
+
+// One line of a points file into *map; `where` ("file:line") names it in errors.
+Status ParsePointsLine(std::string line, const std::string& where, v1::LocalMap* map) {
+  const auto hash = line.find('#');
+  if (hash != std::string::npos) line.resize(hash);
+  std::istringstream in(line);
+  std::string first;
+  if (!(in >> first)) return Status::Ok();
+  double values[3];
+  if (first == "pose") {
+    if (!ReadNumbers(in, 3, values)) {
+      return Status::InvalidArgument(where + ": expected 'pose x y theta' with finite numbers");
+    }
+    v1::Pose2* pose = map->add_trajectory();
+    pose->set_x(values[0]);
+    pose->set_y(values[1]);
+    pose->set_theta(values[2]);
+    return Status::Ok();
+  }
+  std::istringstream point(line);
+  if (!ReadNumbers(point, 2, values)) {
+    return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got " + Quoted(line));
+  }
+  // Points travel as floats: a larger value would arrive infinite.
+  if (std::fabs(values[0]) > std::numeric_limits<float>::max() ||
+      std::fabs(values[1]) > std::numeric_limits<float>::max()) {
+    return Status::InvalidArgument(where + ": a coordinate is beyond the float range (about 3.4e38)");
+  }
+  map->add_x(static_cast<float>(values[0]));
+  map->add_y(static_cast<float>(values[1]));
+  return Status::Ok();
+}
+
 }  // namespace
 
 Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
@@ -28,37 +67,13 @@ Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
   std::ifstream file(path);
   if (!file) return Status::IoError("cannot read points file " + path);
   v1::LocalMap map;
-  std::string line;
-  for (int number = 1; std::getline(file, line); ++number) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    std::istringstream in(line);
-    std::string first;
-    if (!(in >> first)) continue;
-    double values[3];
-    const std::string where = path + ":" + std::to_string(number);
-    if (first == "pose") {
-      if (!ReadNumbers(in, 3, values)) {
-        return Status::InvalidArgument(where + ": expected 'pose x y theta' with finite numbers");
-      }
-      v1::Pose2* pose = map.add_trajectory();
-      pose->set_x(values[0]);
-      pose->set_y(values[1]);
-      pose->set_theta(values[2]);
-      continue;
-    }
-    std::istringstream point(line);
-    if (!ReadNumbers(point, 2, values)) {
-      return Status::InvalidArgument(where + ": expected 'x y' with finite numbers, got " + Quoted(line));
-    }
-    // Points travel as floats: a larger value would arrive infinite.
-    if (std::fabs(values[0]) > std::numeric_limits<float>::max() ||
-        std::fabs(values[1]) > std::numeric_limits<float>::max()) {
-      return Status::InvalidArgument(where + ": a coordinate is beyond the float range (about 3.4e38)");
-    }
-    map.add_x(static_cast<float>(values[0]));
-    map.add_y(static_cast<float>(values[1]));
-  }
+  LineSplitter lines(path, kMaxLineBytes, "a points file holds 'x y' lines",
+                     [&](size_t number, std::string_view text) {
+                       return ParsePointsLine(std::string(text), path + ":" + std::to_string(number), &map);
+                     });
+  Status s = lines.FeedAll(file);
+  if (s.ok()) s = lines.Finish();
+  if (!s.ok()) return s;
   if (map.x_size() == 0) return Status::InvalidArgument(path + ": no points");
   return map;
 }

@@ -15,8 +15,9 @@
 namespace lmd::client {
 
 // IoError if the file cannot be read; InvalidArgument naming file:line for a
-// malformed line (quoting at most 80 characters of it, escaped) or a
-// non-finite number, or if the file holds no point.
+// malformed line (quoting at most 80 characters of it, escaped), a
+// non-finite number or a line longer than 64 KiB (the read stops there), or
+// if the file holds no point.
 Result<v1::LocalMap> ReadPointsFile(const std::string& path);
 
 // Writes `map` in the format above. IoError if the file cannot be written.

@@ -163,6 +163,16 @@ TEST_F(LmdctlTest, ABinaryPointsLineIsQuotedShortAndEscaped) {
       << run.err;
 }
 
+// --file /dev/zero once grew lmdctl's memory for ever (one endless line):
+// a line beyond 64 KiB stops the read.
+TEST_F(LmdctlTest, APointsFileWithoutNewlinesIsRefusedAtItsFirstLine) {
+  std::ofstream(dir_.path() + "/zeros.txt") << std::string(size_t{1} << 20, '\0');
+  CliRun run = RunLmdctl("--server 127.0.0.1:1 insert --collection site --file " + dir_.path() + "/zeros.txt", dir_);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(CountLines(run.err), 1) << run.err.substr(0, 200);
+  EXPECT_NE(run.err.find("zeros.txt:1: line longer than 64 KiB"), std::string::npos) << run.err.substr(0, 200);
+}
+
 TEST_F(LmdctlTest, MalformedPointsFileNamesTheLine) {
   std::ofstream(dir_.path() + "/bad.txt") << "0 0\n1 oops\n";
   TestServer server(data_.path());
