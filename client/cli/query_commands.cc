@@ -141,8 +141,11 @@ int IngestCommand(const CommandContext& ctx) {
   if (!input.ok()) return Fail(input.status().message(), 2);
   if (Required(ctx.args, *input).empty()) return 2;
   const bool bag = *input == "bag";
+  Result<LocalMapOptions> local_maps = LocalMapOptionsFromArgs(ctx.args);
+  if (!local_maps.ok()) return Fail(local_maps.status().message(), 2);
   BagLogSummary summary;
-  Result<std::vector<LocalMap>> maps = bag ? LocalMapsFromBag(ctx.args, &summary) : LocalMapsFromLog(ctx.args);
+  Result<std::vector<LocalMap>> maps =
+      bag ? LocalMapsFromBag(ctx.args, *local_maps, &summary) : LocalMapsFromLog(ctx.args, *local_maps);
   if (!maps.ok()) return Fail(maps.status().message() + " (no map stored)");
   const std::string source = bag ? ctx.args.Get("bag") : ctx.args.Get("log");
   size_t evicted = 0;  // by the collection's cap (retain_maps_per_collection)

@@ -44,10 +44,7 @@ Result<std::string> OneSource(const Args& args, const std::vector<std::string>& 
   return given;
 }
 
-namespace {
-
-// --length and --step; ids "<prefix>-<k>".
-Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args, const std::string& id_prefix) {
+Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args) {
   LocalMapOptions options;
   // Bounded: a step of 1 nm made ingest build maps for ever.
   Result<double> length = GetMetres(args, "length", options.length_m, 0.5, 100.0);
@@ -56,24 +53,20 @@ Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args, const std::str
   if (!step.ok()) return step.status();
   options.length_m = *length;
   options.step_m = *step;
-  options.id_prefix = id_prefix;
   return options;
 }
 
-}  // namespace
-
-Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args) {
+Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args, LocalMapOptions options) {
   const std::string path = args.Get("log");
   Result<LaserLog> log = ReadCarmenLog(path);
   if (!log.ok()) return log.status();
-  Result<LocalMapOptions> options = LocalMapOptionsFromArgs(args, LogName(path));
-  if (!options.ok()) return options.status();
-  std::vector<LocalMap> maps = BuildLocalMaps(*log, *options);
+  options.id_prefix = LogName(path);
+  std::vector<LocalMap> maps = BuildLocalMaps(*log, options);
   if (maps.empty()) return Status::InvalidArgument(path + ": the log is shorter than one local map");
   return maps;
 }
 
-Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* summary) {
+Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, LocalMapOptions options, BagLogSummary* summary) {
   std::string path = args.Get("bag");
   while (path.size() > 1 && path.back() == '/') path.pop_back();  // a directory's name, not ""
   BagLogOptions bag;
@@ -83,16 +76,15 @@ Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* 
   bag.scan_matching = args.Switch("scan-matching");
   bag.allow_nan_ranges = args.Switch("allow-nan");
   bag.read.salvage_truncated = args.Switch("salvage");
-  Result<LocalMapOptions> options = LocalMapOptionsFromArgs(args, LogName(path));
-  if (!options.ok()) return options.status();
+  options.id_prefix = LogName(path);
   Result<LaserLog> log = ReadBagLaserLog(path, bag, summary);
   if (!log.ok()) return log.status();
-  std::vector<LocalMap> maps = BuildLocalMaps(*log, *options);
+  std::vector<LocalMap> maps = BuildLocalMaps(*log, options);
   if (maps.empty()) {
     const std::vector<double> travel = CumulativeTravel(*log);
     char what[160];
     std::snprintf(what, sizeof what, ": %zu posed scans over %.1f m of travel, shorter than one local map (%g m)",
-                  log->scans.size(), travel.empty() ? 0.0 : travel.back(), options->length_m);
+                  log->scans.size(), travel.empty() ? 0.0 : travel.back(), options.length_m);
     return Status::InvalidArgument(path + what);
   }
   return maps;
@@ -106,8 +98,10 @@ Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
   if (!given.ok()) return given.status();
   Result<long> earlier = GetPositive(args, "sequence", 1, 16);
   Result<long> spacing = GetPositive(args, "sequence-step", 5, 1000);
+  Result<LocalMapOptions> local_maps = LocalMapOptionsFromArgs(args);
   if (!earlier.ok()) return earlier.status();
   if (!spacing.ok()) return spacing.status();
+  if (!local_maps.ok()) return local_maps.status();
   if (args.Has("file")) {
     if (args.Has("sequence")) return Status::InvalidArgument("--sequence needs --log or --bag (a points file has no route)");
     usage = false;
@@ -128,7 +122,8 @@ Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
                                    " or later");
   }
   usage = false;
-  Result<std::vector<LocalMap>> maps = args.Has("bag") ? LocalMapsFromBag(args, nullptr) : LocalMapsFromLog(args);
+  Result<std::vector<LocalMap>> maps =
+      args.Has("bag") ? LocalMapsFromBag(args, *local_maps, nullptr) : LocalMapsFromLog(args, *local_maps);
   if (!maps.ok()) return maps.status();
   if (static_cast<size_t>(k) >= maps->size()) {
     usage = true;

@@ -10,6 +10,7 @@
 
 #include "client/cli/args.h"
 #include "core/io/bag_log.h"
+#include "core/localmap/local_map_builder.h"
 #include "core/status.h"
 #include "core/types.h"
 #include "lmd/v1/lmd.pb.h"
@@ -28,14 +29,20 @@ std::string LogName(const std::string& path);
 Result<std::string> OneSource(const Args& args, const std::vector<std::string>& allowed, const std::string& what,
                               bool numbered);
 
-// The local maps of the log named by --log (with --length, --step), map ids
+// --length and --step (m; 5 and 1 by default): how local maps are built
+// from a log or bag. InvalidArgument naming the option and its range: a
+// usage error, to be reported before any file is read.
+Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args);
+
+// The local maps of the log named by --log, built with `options`, map ids
 // "<log file name without .log/.gz>-<k>". Errors name the file and line.
-Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args);
+Result<std::vector<LocalMap>> LocalMapsFromLog(const Args& args, LocalMapOptions options);
 
 // The local maps of the bag named by --bag (a file or a rosbag2 directory),
-// map ids "<bag name without extension>-<k>"; *summary (if not null) says
-// which topics and pose source were used. Errors name the bag and message.
-Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, BagLogSummary* summary);
+// built with `options`, map ids "<bag name without extension>-<k>";
+// *summary (if not null) says which topics and pose source were used.
+// Errors name the bag and message.
+Result<std::vector<LocalMap>> LocalMapsFromBag(const Args& args, LocalMapOptions options, BagLogSummary* summary);
 
 // A query map and, for a sequence query, the robot's earlier maps.
 struct QueryInput {

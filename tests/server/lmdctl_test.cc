@@ -230,12 +230,19 @@ class LmdctlLogTest : public LmdctlTest {
   }
 };
 
+// A step of 1 nm once made ingest build maps for ever. A bad --step or
+// --length is a usage error (exit 2, as every other bad option value; it
+// was 1), for ingest and query alike, refused before the log is read.
 TEST_F(LmdctlLogTest, AStepTooSmallIsRefusedNamingTheRange) {
-  // A step of 1 nm once made ingest build maps for ever.
-  CliRun run = RunLmdctl("--server 127.0.0.1:1 ingest --collection fleet --step 1e-9 --log " + dir_.path() + "/robot.log",
-                         dir_);
-  EXPECT_EQ(run.exit_code, 1);
-  EXPECT_NE(run.err.find("--step must be a number of metres from 0.1 to 100"), std::string::npos) << run.err;
+  const std::string log = " --log " + dir_.path() + "/robot.log";
+  for (const std::string& command : {"ingest --collection fleet --step 1e-9" + log,
+                                     "query --collection fleet --map 1 --step 0" + log,
+                                     std::string("ingest --collection fleet --length 1000 --log /nonexistent.log")}) {
+    CliRun run = RunLmdctl("--server 127.0.0.1:1 " + command, dir_);
+    EXPECT_EQ(run.exit_code, 2) << command;
+    EXPECT_EQ(CountLines(run.err), 1) << command << ": " << run.err;
+    EXPECT_NE(run.err.find(" must be a number of metres from "), std::string::npos) << run.err;
+  }
 }
 
 TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
