@@ -209,7 +209,7 @@ Status CheckBackupPath(const std::string& directory) {
   }
   for (const std::filesystem::path& name : std::filesystem::path(directory)) {
     if (name.native().size() > kMaxBackupNameBytes) {
-      return Status::InvalidArgument("backup directory " + Quoted(directory) + ": the name " + Quoted(name) +
+      return Status::InvalidArgument("backup directory " + Quoted(directory) + ": the name " + Quoted(name.string()) +
                                      " is longer than " + std::to_string(kMaxBackupNameBytes) + " bytes");
     }
   }
@@ -225,7 +225,7 @@ Status CheckBackupPlace(const std::string& directory, const std::string& data_di
   const fs::path target(directory);
   if (!fs::is_directory(target.parent_path(), error)) {
     return Status::InvalidArgument("backup directory " + Quoted(directory) + ": its parent " +
-                                   Quoted(target.parent_path()) + " is not an existing directory");
+                                   Quoted(target.parent_path().string()) + " is not an existing directory");
   }
   const fs::path parent = fs::weakly_canonical(target.parent_path(), error);
   const fs::path store = fs::weakly_canonical(data_dir, error);
