@@ -119,10 +119,11 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     if (second > 0) out->verdict = Judge(&judged, options.confidence, second);
   }
   // An answer whose searches were given up (their stop) is never sure, nor
-  // its place clear: the rivals were not all looked for.
+  // its place clear: the rivals were not all looked for. Nor one of a few
+  // points (min_sure_points).
   const std::function<bool()>& stop = options.match.correlative.stop;
-  const bool given_up = stop && stop();
-  if (given_up) out->verdict.sure = false;
+  const bool cannot_be_sure = (stop && stop()) || query.match.points.size() < options.min_sure_points;
+  if (cannot_be_sure) out->verdict.sure = false;
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
 
@@ -132,7 +133,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // min_margin; a prior's place needs no margin), though the calibrated
   // confidence or the maps' pose spread keep the answer unsure.
   const Verdict& v = out->verdict;
-  const bool place_clear = options.changes_where_place_clear && !given_up &&
+  const bool place_clear = options.changes_where_place_clear && !cannot_be_sure &&
                            v.best_score >= options.confidence.min_score &&
                            (prior_place || v.best_score - v.rival_score >= options.confidence.min_margin);
   if (with_changes && (v.sure || place_clear)) {

@@ -159,6 +159,14 @@ struct LocalizeOptions {
   // 11.5 %). A best hit at 0.5 instead of min_score: tracking .633 at 8.5 %
   // false, 0.4: .663 at 12.1 %.
   bool prior_changes_without_margin = true;
+  // A query of fewer points is never sure nor gets masks: a point or two fit
+  // somewhere in any stored map and pin no pose (a single point scored 1.0,
+  // sure, against orebro's maps; found by a bad-input audit). Not fitted:
+  // below every real local map of the nine logs (after the 0.1 m
+  // deduplication: 145-344 points at the least per log, one map of frcampus
+  // 34), so no measured answer changes. Points on one line are left to the
+  // rival search, which finds their other fits.
+  size_t min_sure_points = 30;
   size_t top_k = 10;  // hits returned
   // Prior queries (prior.h): anchored maps matched, nearest the predicted
   // query first, and the window beyond the prior's radius; with

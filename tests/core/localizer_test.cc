@@ -1146,6 +1146,26 @@ TEST(LocalizerTest, APriorsAnswerGivesItsChangeMasksWhereItsBestHitFitsWhateverT
   EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " prior answers gave masks";
 }
 
+// A map of a point or two, or of points on one line, fits somewhere in
+// any stored map and constrains no pose: it is never answered sure.
+TEST(LocalizerTest, AMapOfAFewPointsOrOfOneLineIsNeverSure) {
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);
+  const LocalMap& real = DemoMaps()[42];
+  std::vector<std::vector<Point2>> degenerate = {{real.points[0]},
+                                                 {real.points[0], real.points[real.points.size() / 2]}};
+  std::vector<Point2> line;
+  for (int i = 0; i < 60; ++i) line.push_back({real.points[0].x + 0.1 * i, real.points[0].y});
+  degenerate.push_back(line);
+  for (const std::vector<Point2>& points : degenerate) {
+    LocalMap query = real;
+    query.points = points;
+    query.scans.clear();
+    const Localization l = LocalizeIn(collection, query);
+    EXPECT_FALSE(l.verdict.sure) << points.size() << " points, best score " << l.verdict.best_score;
+  }
+}
+
 // lmdd prepares a map once and uses it both to store and to query.
 TEST(LocalizerTest, APreparedPlaceGivesTheSameQueryAsPreparingFromScratch) {
   const LocalMap& map = DemoMaps()[42];
