@@ -177,6 +177,18 @@ TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
   ExpectSameLog(head, *log);
 }
 
+// A salvaged read of ShortLog's bag cut in half: its first scans, more
+// than 10 and fewer than all, and a summary that says where the cut fell.
+void ExpectTheLogsHead(const Result<LaserLog>& log, const BagLogSummary& summary) {
+  ASSERT_TRUE(log.ok()) << log.status().ToString();
+  ASSERT_GT(log->scans.size(), 10u);
+  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
+  LaserLog head = ShortLog();
+  head.scans.resize(log->scans.size());
+  ExpectSameLog(head, *log);
+  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+}
+
 // intel.mcap cut at 800 KB ends inside its first chunk (uncompressed, 1 MB):
 // salvage once found no channel there and said "no sensor_msgs/LaserScan
 // topic; the bag's 0 topics". The complete records before the cut are read.
@@ -187,13 +199,7 @@ TEST(BagReaderTest, SalvageReadsTheCompleteRecordsOfTheUncompressedChunkACutFall
   salvage.read.salvage_truncated = true;
   BagLogSummary summary;
   Result<LaserLog> log = ReadBytesAsMcap(cut, salvage, &summary);
-  ASSERT_TRUE(log.ok()) << log.status().ToString();
-  ASSERT_GT(log->scans.size(), 10u);
-  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
-  LaserLog head = ShortLog();
-  head.scans.resize(log->scans.size());
-  ExpectSameLog(head, *log);
-  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+  ExpectTheLogsHead(log, summary);
 }
 
 // A compressed chunk cannot be read in part: when the cut leaves nothing
@@ -263,13 +269,7 @@ TEST(BagReaderTest, SalvageWalksARos1BagWhoseIndexIsCutOff) {
   salvage.read.salvage_truncated = true;
   BagLogSummary summary;
   Result<LaserLog> log = ReadBytesAsRos1(cut, salvage, &summary);
-  ASSERT_TRUE(log.ok()) << log.status().ToString();
-  ASSERT_GT(log->scans.size(), 10u);
-  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
-  LaserLog head = ShortLog();
-  head.scans.resize(log->scans.size());
-  ExpectSameLog(head, *log);
-  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+  ExpectTheLogsHead(log, summary);
 
   Result<LaserLog> nothing = ReadBytesAsRos1(full.substr(0, 5000), salvage);  // inside the first chunk
   ASSERT_FALSE(nothing.ok());
