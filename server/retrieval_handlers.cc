@@ -95,7 +95,7 @@ bool LmdServiceImpl::AnchorIsGiven(const std::string& collection, const std::str
 
 Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const LocalQuery& query,
                                               const LocalizeOptions& options,
-                                              const std::function<bool()>& cancelled) const {
+                                              const std::function<bool()>& stop) const {
   const std::unordered_set<std::string> excluded(request.exclude->begin(), request.exclude->end());
   const StoreMapSource source(store_, &prepared_, *request.collection, excluded);
   if (request.prior != nullptr) {
@@ -104,7 +104,7 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
     prior.pose = FromProto(wire.pose());
     prior.radius_m = wire.radius_m();
     prior.heading_sigma_rad = wire.heading_sigma_rad();
-    Localization near = LocalizeNear(query, source, options, prior, {}, cancelled, request.with_changes);
+    Localization near = LocalizeNear(query, source, options, prior, {}, stop, request.with_changes);
     if (!near.verdict.prior_failed) return near;
     if (!wire.fall_back_to_global()) {
       // Maps near a wrong prior matched at their best pose anyway: those
@@ -118,7 +118,7 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
     // and only they give one (a prior needs anchored maps).
     LocalizeOptions site = options;
     site.search.anchored_only = true;
-    Localization global = Localize(query, source, site, {}, cancelled, request.with_changes);
+    Localization global = Localize(query, source, site, {}, stop, request.with_changes);
     global.verdict.prior_used = global.verdict.prior_failed = global.verdict.fell_back_to_global = true;
     return global;
   }
@@ -131,9 +131,9 @@ Result<Localization> LmdServiceImpl::Localise(const QueryRequest& request, const
       step.travel_m = wire.travel_m();
       steps.push_back(std::move(step));
     }
-    return LocalizeSequence(query, steps, source, options, {}, cancelled, request.with_changes);
+    return LocalizeSequence(query, steps, source, options, {}, stop, request.with_changes);
   }
-  return Localize(query, source, options, {}, cancelled, request.with_changes);
+  return Localize(query, source, options, {}, stop, request.with_changes);
 }
 
 Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& request,
@@ -207,8 +207,9 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
     if (!localization.ok()) return localization.status();
     query.localization = std::move(localization).value();
     if (out_of_time) {
-      return Status::DeadlineExceeded("the query was given up after max_query_seconds (" +
-                                      fmt::format("{:g}", config_.max_query_seconds) + " s) of scan matching");
+      return Status::DeadlineExceeded(
+          fmt::format("the query was given up after max_query_seconds ({:g} s) of scan matching",
+                      config_.max_query_seconds));
     }
     if (context->IsCancelled()) return Status::Cancelled("call cancelled during verification");
     for (const LocalizedHit& hit : query.localization.hits) {

@@ -160,15 +160,9 @@ TEST(BagReaderTest, AnMcapCutAfterItsLastChunkIsScannedLikeACrashedRecordersFile
   ExpectSameLog(ShortLog(), *log);
 }
 
-TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
-  McapWriteOptions o;
-  o.chunk_bytes = 8 << 10;
-  const std::string full = McapBytes(BagFromLog(ShortLog(), MessageEncoding::kCdr), o);
-  const std::string cut = full.substr(0, full.size() / 2);
-  EXPECT_FALSE(ReadBytesAsMcap(cut).ok());
-  BagLogOptions salvage;
-  salvage.read.salvage_truncated = true;
-  Result<LaserLog> log = ReadBytesAsMcap(cut, salvage);
+// A salvaged read of ShortLog's bag cut in half: its first scans, more
+// than 10 and fewer than all.
+void ExpectTheLogsHead(const Result<LaserLog>& log) {
   ASSERT_TRUE(log.ok()) << log.status().ToString();
   ASSERT_GT(log->scans.size(), 10u);
   ASSERT_LT(log->scans.size(), ShortLog().scans.size());
@@ -177,16 +171,15 @@ TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
   ExpectSameLog(head, *log);
 }
 
-// A salvaged read of ShortLog's bag cut in half: its first scans, more
-// than 10 and fewer than all, and a summary that says where the cut fell.
-void ExpectTheLogsHead(const Result<LaserLog>& log, const BagLogSummary& summary) {
-  ASSERT_TRUE(log.ok()) << log.status().ToString();
-  ASSERT_GT(log->scans.size(), 10u);
-  ASSERT_LT(log->scans.size(), ShortLog().scans.size());
-  LaserLog head = ShortLog();
-  head.scans.resize(log->scans.size());
-  ExpectSameLog(head, *log);
-  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
+TEST(BagReaderTest, SalvageReadsTheCompleteChunksOfAFileCutInsideOne) {
+  McapWriteOptions o;
+  o.chunk_bytes = 8 << 10;
+  const std::string full = McapBytes(BagFromLog(ShortLog(), MessageEncoding::kCdr), o);
+  const std::string cut = full.substr(0, full.size() / 2);
+  EXPECT_FALSE(ReadBytesAsMcap(cut).ok());
+  BagLogOptions salvage;
+  salvage.read.salvage_truncated = true;
+  ExpectTheLogsHead(ReadBytesAsMcap(cut, salvage));
 }
 
 // intel.mcap cut at 800 KB ends inside its first chunk (uncompressed, 1 MB):
@@ -199,7 +192,8 @@ TEST(BagReaderTest, SalvageReadsTheCompleteRecordsOfTheUncompressedChunkACutFall
   salvage.read.salvage_truncated = true;
   BagLogSummary summary;
   Result<LaserLog> log = ReadBytesAsMcap(cut, salvage, &summary);
-  ExpectTheLogsHead(log, summary);
+  ExpectTheLogsHead(log);
+  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
 }
 
 // A compressed chunk cannot be read in part: when the cut leaves nothing
@@ -269,7 +263,8 @@ TEST(BagReaderTest, SalvageWalksARos1BagWhoseIndexIsCutOff) {
   salvage.read.salvage_truncated = true;
   BagLogSummary summary;
   Result<LaserLog> log = ReadBytesAsRos1(cut, salvage, &summary);
-  ExpectTheLogsHead(log, summary);
+  ExpectTheLogsHead(log);
+  EXPECT_NE(summary.format.find("cut short in the record at offset "), std::string::npos) << summary.format;
 
   Result<LaserLog> nothing = ReadBytesAsRos1(full.substr(0, 5000), salvage);  // inside the first chunk
   ASSERT_FALSE(nothing.ok());
