@@ -203,8 +203,8 @@ grpc::ServerUnaryReactor* LmdServiceImpl::InsertMaps(grpc::CallbackServerContext
   });
 }
 
-grpc::ServerReadReactor<v1::InsertMapRequest>* LmdServiceImpl::StreamInsertMaps(grpc::CallbackServerContext* context,
-                                                                                 v1::InsertMapsResponse* response) {
+grpc::ServerReadReactor<grpc::ByteBuffer>* LmdServiceImpl::StreamInsertMaps(grpc::CallbackServerContext* context,
+                                                                             grpc::ByteBuffer* response) {
   return new StreamInsertReactor(context, response, this, runner_);
 }
 

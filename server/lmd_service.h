@@ -22,15 +22,16 @@
 
 namespace lmd::server {
 
-class LmdServiceImpl final : public v1::LmdService::CallbackService {
+// StreamInsertMaps reads its messages as bytes (stream_insert.h).
+class LmdServiceImpl final : public v1::LmdService::WithRawCallbackMethod_StreamInsertMaps<v1::LmdService::CallbackService> {
  public:
   // `store`, `runner` and `metrics` must outlive the service.
   LmdServiceImpl(const ServerConfig& config, MapStore* store, CallRunner* runner, CallMetrics* metrics);
 
   grpc::ServerUnaryReactor* InsertMaps(grpc::CallbackServerContext* context, const v1::InsertMapsRequest* request,
                                        v1::InsertMapsResponse* response) override;
-  grpc::ServerReadReactor<v1::InsertMapRequest>* StreamInsertMaps(grpc::CallbackServerContext* context,
-                                                                  v1::InsertMapsResponse* response) override;
+  grpc::ServerReadReactor<grpc::ByteBuffer>* StreamInsertMaps(grpc::CallbackServerContext* context,
+                                                              grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* GetMap(grpc::CallbackServerContext* context, const v1::GetMapRequest* request,
                                    v1::GetMapResponse* response) override;
   grpc::ServerUnaryReactor* DeleteMap(grpc::CallbackServerContext* context, const v1::DeleteMapRequest* request,

@@ -28,6 +28,7 @@
 #include "server/map_store.h"
 #include "server/metrics.h"
 #include "server/metrics_http.h"
+#include "server/parse_errors.h"
 #include "server/worker_pool.h"
 
 namespace lmd::server {
@@ -157,6 +158,9 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.SetMaxSendMessageSize(config.max_message_bytes);
   builder.RegisterService(server->service_.get());
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(ParseErrorInterceptors());
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   if (server->replica_service_) builder.RegisterService(server->replica_service_.get());
   server->server_ = builder.BuildAndStart();
   if (!server->server_ || server->port_ == 0) {
