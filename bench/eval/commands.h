@@ -16,6 +16,8 @@ int RunExport(int argc, char** argv);
 int RunServed(int argc, char** argv);
 // lmd-eval prior-misses [--log FILE...] [--one-pose] [--tracking]
 int RunPriorMisses(int argc, char** argv);
+// lmd-eval change-misses [--log FILE...] [--global]
+int RunChangeMisses(int argc, char** argv);
 // lmd-eval global-misses [--log FILE...] [--every N] [--anchored]
 int RunGlobalMisses(int argc, char** argv);
 // lmd-eval sequence-misses [--log FILE...] [--every N] [--list]

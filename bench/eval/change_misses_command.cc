@@ -1,0 +1,197 @@
+// lmd-eval change-misses: why the simulated change is not in a query's top
+// change mask. In process, with lmdd's defaults: every map of each log is
+// stored anchored at its true pose; each map with a place and a simulated
+// change is asked, changed, with a tracking robot's prior (lmd-eval served
+// --mode tracking's noise; --global: without a prior), maps within 10 m of
+// its travel excluded. Each task is put in the first class that holds:
+//   top            the first mask hits the change (as lmd-eval served counts);
+//   lower          a later mask does;
+//   no masks       lmdd computed none: the answer was neither sure nor its
+//                  place clear (its best hit fits and, without a prior, no
+//                  disagreeing hit comes within the margin);
+//   wrong place    no masks, and the top hit does not show the place;
+//   credited away  a mask hits the change but is credited to a stored map
+//                  that does not show the place (the protocol counts it false);
+// and otherwise, by what most of the change's points were to the maps of the
+// answer's place (those agreeing with its best hit, as change masks use):
+//   explained      a map has a point within explained_radius_m of them;
+//   unseen         no map saw them as free space;
+//   moving         the query's own scans saw through them (seen_through_share);
+//   few            none of those, but too few of them were kept to form a mask.
+// Before those, "weak": the masks against the same maps without the
+// evidence floor (GeometricChangeOptions::min_evidence) hit the change. The
+// masks lmdd returned, and those of them that miss the change or are
+// credited to a map that does not show the place (false), are counted too.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <random>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include "bench/eval/args.h"
+#include "bench/eval/answer_scoring.h"
+#include "bench/eval/commands.h"
+#include "bench/eval/eval_dataset.h"
+#include "bench/eval/stored_log.h"
+#include "core/change/sightings.h"
+#include "core/eval/retrieval_metrics.h"
+#include "core/localize/prior.h"
+#include "core/localmap/pose_ops.h"
+#include "core/sim/pose_noise.h"
+#include "core/util/progress_bar.h"
+
+namespace lmd::eval {
+namespace {
+
+enum ChangeClass { kTop, kLower, kNoMasks, kWrongPlace, kCreditedAway, kWeak, kExplained, kUnseen, kMoving, kFew, kClasses };
+const char* const kClassNames[kClasses] = {"top",  "lower",     "no masks", "wrong place", "credited away",
+                                           "weak", "explained", "unseen",   "moving",      "few"};
+
+struct ChangeCounts {
+  std::string name;
+  size_t tasks = 0, masks = 0, false_masks = 0;
+  size_t classes[kClasses] = {};
+};
+
+// Whether lmdd computed masks for an answer that is not sure (Conclude in
+// core/localize/localizer.cc): its best hit fits and, but for a prior's
+// answer, no disagreeing hit comes within the margin.
+bool PlaceClear(const Verdict& v, const LocalizeOptions& options, bool prior) {
+  return v.best_score >= options.confidence.min_score &&
+         (prior || v.best_score - v.rival_score >= options.confidence.min_margin);
+}
+
+// What most of the change's points were to the answer's place maps.
+ChangeClass WhyNotFound(const EvalQuery& q, const Localization& answer, const LocalizeOptions& options) {
+  std::vector<const LocalizedHit*> place;
+  for (const LocalizedHit& h : answer.hits) {
+    if (h.agrees_with_best && h.db && h.score >= answer.verdict.best_score - options.confidence.agreement_window) {
+      place.push_back(&h);
+    }
+  }
+  const GeometricChangeOptions& change = options.changes;
+  std::vector<AlignedMap> maps;
+  for (const LocalizedHit* h : place) maps.push_back({h->db.get(), h->pose, h->map_id});
+  GeometricChangeOptions no_floor = change;
+  no_floor.min_evidence = 0.0;
+  for (const ChangeMask& m : GeometricChanges(q.changed.points, q.changed.trajectory, q.changed.scans, maps, no_floor)) {
+    if (MaskHitsChange(m.points, q.changed_points, kMaskHitM)) return kWeak;
+  }
+  const std::vector<Sightings> sightings = CountSightings(q.changed_points, q.changed.scans);
+  size_t explained = 0, unseen = 0, moving = 0;
+  for (size_t i = 0; i < q.changed_points.size(); ++i) {
+    bool is_explained = false, seen_free = false;
+    for (const LocalizedHit* h : place) {
+      const Point2 p = TransformPoint(h->pose, q.changed_points[i]);
+      is_explained |= NearestPoint(*h->db, p, change.explained_radius_m) >= 0;
+      seen_free |= InFreeSpace(*h->db, p);
+    }
+    const double seen = sightings[i].returns + sightings[i].through;
+    if (is_explained) {
+      ++explained;
+    } else if (!seen_free) {
+      ++unseen;
+    } else if (seen > 0 && sightings[i].through > change.seen_through_share * seen) {
+      ++moving;
+    }
+  }
+  const size_t half = q.changed_points.size() / 2;
+  if (explained > half) return kExplained;
+  if (unseen > half) return kUnseen;
+  if (moving > half) return kMoving;
+  return kFew;
+}
+
+ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool global) {
+  ChangeCounts counts;
+  counts.name = d.name;
+  const std::unique_ptr<StoredLog> stored = StoreLog(d, options, /*anchored=*/true);
+  const MemoryCollection& collection = stored->collection;
+  ProgressBar bar(d.name + ": changed queries", d.queries.size());
+  for (const EvalQuery& q : d.queries) {
+    bar.Add();
+    if (q.places.empty() || !q.change_ok || q.changed.points.empty()) continue;
+    ++counts.tasks;
+    const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
+    auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
+    const LocalQuery query = PrepareLocalQuery(q.changed, options);
+    Localization answer;
+    if (global) {
+      answer = Localize(query, collection, options, excluded, {}, /*with_changes=*/true);
+    } else {
+      std::mt19937_64 rng(q.map + 1);
+      Prior prior;
+      prior.pose = PerturbedPose(d.maps[q.map].truth.global_frame, kTrackingPrior, rng);
+      prior.radius_m = kTrackingPrior.radius_m;
+      prior.heading_sigma_rad = kTrackingPrior.sigma_deg * M_PI / 180;
+      answer = LocalizeNear(query, collection, options, prior, excluded, {}, /*with_changes=*/true);
+    }
+    std::optional<ChangeClass> c;
+    bool hits_change = false;
+    for (size_t r = 0; r < answer.changes.size(); ++r) {
+      const ChangeMask& m = answer.changes[r];
+      const bool hits = MaskHitsChange(m.points, q.changed_points, kMaskHitM);
+      hits_change |= hits;
+      const bool finds = hits && d.ShowsPlace(q, m.db_map_id);
+      if (finds && !c) c = r == 0 ? kTop : kLower;
+      ++counts.masks;
+      counts.false_masks += !finds;
+    }
+    if (!c) {
+      const bool right_place = !answer.hits.empty() && d.ShowsPlace(q, answer.hits[0].map_id);
+      if (answer.changes.empty() && !right_place) {
+        c = kWrongPlace;
+      } else if (hits_change) {
+        c = kCreditedAway;
+      } else if (answer.changes.empty() && !answer.verdict.sure && !PlaceClear(answer.verdict, options, !global)) {
+        c = kNoMasks;
+      } else {
+        c = WhyNotFound(q, answer, options);
+      }
+    }
+    ++counts.classes[*c];
+  }
+  bar.Done();
+  return counts;
+}
+
+void Print(const ChangeCounts& c) {
+  std::printf("%-10s %6zu %6.3f %6.1f %%", c.name.c_str(), c.tasks,
+              static_cast<double>(c.classes[kTop]) / std::max<size_t>(1, c.tasks),
+              100.0 * static_cast<double>(c.false_masks) / std::max<size_t>(1, c.masks));
+  for (size_t k = 0; k < kClasses; ++k) std::printf(" %11zu", c.classes[k]);
+  std::printf("\n");
+}
+
+}  // namespace
+
+int RunChangeMisses(int argc, char** argv) {
+  Args args;
+  if (!args.Parse(argc, argv, 0, {"global"})) {
+    std::fprintf(stderr, "lmd-eval change-misses: %s\n", args.error().c_str());
+    return 2;
+  }
+  const LocalizeOptions options;
+  std::vector<ChangeCounts> all;
+  const int read = ForEachServedLog(args.GetAll("log"), "change-misses", [&](const Dataset& d) {
+    all.push_back(CountChanges(d, options, args.Has("global")));
+  });
+  if (read != 0) return read;
+  std::printf("%-10s %6s %6s %8s", "log", "tasks", "top", "false");
+  for (const char* name : kClassNames) std::printf(" %11s", name);
+  std::printf("\n");
+  ChangeCounts total;
+  total.name = "all";
+  for (const ChangeCounts& c : all) {
+    Print(c);
+    total.tasks += c.tasks, total.masks += c.masks, total.false_masks += c.false_masks;
+    for (size_t k = 0; k < kClasses; ++k) total.classes[k] += c.classes[k];
+  }
+  Print(total);
+  return 0;
+}
+
+}  // namespace lmd::eval
