@@ -7,7 +7,7 @@
 //   top            the first mask hits the change (as lmd-eval served counts);
 //   lower          a later mask does;
 //   no masks       lmdd computed none: the answer was neither sure nor its
-//                  place clear (its best hit fits and, without a prior, no
+//                  place clear (its place fits and, without a prior, no
 //                  disagreeing hit comes within the margin);
 //   wrong place    no masks, and the top hit does not show the place;
 //   credited away  a mask hits the change but is credited to a stored map
@@ -39,6 +39,7 @@
 #include "core/change/sightings.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localize/prior.h"
+#include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
 #include "core/sim/pose_noise.h"
 #include "core/util/progress_bar.h"
@@ -57,10 +58,16 @@ struct ChangeCounts {
 };
 
 // Whether lmdd computed masks for an answer that is not sure (Conclude in
-// core/localize/localizer.cc): its best hit fits and, but for a prior's
-// answer, no disagreeing hit comes within the margin.
-bool PlaceClear(const Verdict& v, const LocalizeOptions& options, bool prior) {
-  return v.best_score >= options.confidence.min_score &&
+// core/localize/localizer.cc): its place fits (a prior's: its best hit; a
+// global answer's: the maps agreeing with its best hit together) and, but
+// for a prior's answer, no disagreeing hit comes within the margin.
+bool PlaceClear(const LocalQuery& query, const Localization& answer, const LocalizeOptions& options, bool prior) {
+  const Verdict& v = answer.verdict;
+  double fit = v.best_score;
+  if (!prior && options.changes_place_fit_of_union && fit < options.confidence.min_score) {
+    fit = std::max(fit, localize_internal::PlaceFit(query, answer.hits, v.best_score, options));
+  }
+  return fit >= options.confidence.min_score &&
          (prior || v.best_score - v.rival_score >= options.confidence.min_margin);
 }
 
@@ -146,7 +153,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
         c = kWrongPlace;
       } else if (hits_change) {
         c = kCreditedAway;
-      } else if (answer.changes.empty() && !answer.verdict.sure && !PlaceClear(answer.verdict, options, !global)) {
+      } else if (answer.changes.empty() && !answer.verdict.sure && !PlaceClear(query, answer, options, !global)) {
         c = kNoMasks;
       } else {
         c = WhyNotFound(q, answer, options);

@@ -94,6 +94,25 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
   return hits;
 }
 
+double PlaceFit(const LocalQuery& query, const std::vector<LocalizedHit>& hits, double best_score,
+                const LocalizeOptions& options) {
+  const std::vector<Point2>& points = query.match.points;
+  if (points.empty()) return 0.0;
+  double fit = 0.0;
+  for (const Point2& p : points) {
+    bool explained = false, in_free_space = false;
+    for (const LocalizedHit& h : hits) {
+      if (!h.agrees_with_best || !h.db || h.score < best_score - options.confidence.agreement_window) continue;
+      const Point2 in_map = TransformPoint(h.pose, p);
+      explained = NearestPoint(*h.db, in_map, options.match.inlier_radius_m) >= 0;
+      if (explained) break;
+      in_free_space = in_free_space || InFreeSpace(*h.db, in_map);
+    }
+    fit += explained ? 1.0 : in_free_space ? -options.conflict_weight : 0.0;
+  }
+  return fit / static_cast<double>(points.size());
+}
+
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
               Localization* out, bool prior_place) {
@@ -133,8 +152,13 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // min_margin; a prior's place needs no margin), though the calibrated
   // confidence or the maps' pose spread keep the answer unsure.
   const Verdict& v = out->verdict;
+  double place_fit = v.best_score;
+  if (options.changes_place_fit_of_union && !prior_place && with_changes && !v.sure &&
+      place_fit < options.confidence.min_score) {
+    place_fit = std::max(place_fit, PlaceFit(query, hits, v.best_score, options));
+  }
   const bool place_clear = options.changes_where_place_clear && !cannot_be_sure &&
-                           v.best_score >= options.confidence.min_score &&
+                           place_fit >= options.confidence.min_score &&
                            (prior_place || v.best_score - v.rival_score >= options.confidence.min_margin);
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();

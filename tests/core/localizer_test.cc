@@ -1146,6 +1146,84 @@ TEST(LocalizerTest, APriorsAnswerGivesItsChangeMasksWhereItsBestHitFitsWhateverT
   EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " prior answers gave masks";
 }
 
+// The place's fit over the maps agreeing with the best: a query split over
+// two stored maps fits the two together as it fits its own map, though each
+// shows about half of it; a hit that does not agree adds nothing; a query
+// point in an agreeing map's free space that none of them explains counts
+// against the fit, as in verification.
+TEST(LocalizerTest, APlaceFitsAsTheMapsAgreeingWithTheBestHitShowItTogether) {
+  const LocalMap& map = DemoMaps()[40];
+  const LocalQuery query = PrepareLocalQuery(map, kOptions);
+  std::vector<Point2> left, right;
+  for (const Point2& p : map.points) (p.x < query.match.centroid.x ? left : right).push_back(p);
+  auto hit = [](const PreparedMap& db, bool agrees) {
+    LocalizedHit h;
+    h.db = std::make_shared<const PreparedMap>(db);
+    h.score = 0.5;
+    h.agrees_with_best = agrees;
+    return h;
+  };
+  const PreparedMap whole = PrepareMap(map, kOptions.match.map);
+  const PreparedMap left_half = PreparePoints(left, kOptions.match.map);
+  const PreparedMap right_half = PreparePoints(right, kOptions.match.map);
+  using localize_internal::PlaceFit;
+  const double own = PlaceFit(query, {hit(whole, true)}, 0.5, kOptions);
+  const double halves = PlaceFit(query, {hit(left_half, true), hit(right_half, true)}, 0.5, kOptions);
+  const double one_half = PlaceFit(query, {hit(left_half, true), hit(right_half, false)}, 0.5, kOptions);
+  EXPECT_GT(own, 0.95);
+  EXPECT_NEAR(halves, own, 0.02);
+  EXPECT_GT(one_half, 0.25);
+  EXPECT_LT(one_half, 0.75);
+  // The query with points more, in a patch its own map saw free (beside the
+  // middle of the robot's path): each is a conflict.
+  LocalMap crowded = map;
+  const Pose2& middle = map.trajectory[map.trajectory.size() / 2];
+  for (int i = 0; i < 25; ++i) {
+    const Point2 p{middle.x + 0.3 + 0.15 * (i % 5), middle.y - 0.3 + 0.15 * (i / 5)};
+    ASSERT_TRUE(InFreeSpace(whole, p)) << i;
+    crowded.points.push_back(p);
+  }
+  const LocalQuery crowded_query = PrepareLocalQuery(crowded, kOptions);
+  const double n = static_cast<double>(query.match.points.size());
+  const double added = static_cast<double>(crowded_query.match.points.size()) - n;
+  ASSERT_GT(added, 20);
+  EXPECT_NEAR(PlaceFit(crowded_query, {hit(whole, true)}, 0.5, kOptions), (own * n - added) / (n + added), 0.005);
+}
+
+// Where the robot's place is split over two stored maps (five metres of
+// route before and after its own, the maps between left out), neither fits
+// the changed query on its own, so a global answer is not sure; its masks
+// still come where the two fit together and no rival is within the margin,
+// the first mostly on the change. With changes_place_fit_of_union off, such
+// answers give none.
+TEST(LocalizerTest, APlaceSplitOverTwoMapsGivesItsChangeMasksWhereTheyFitTogether) {
+  LocalizeOptions off = kOptions;
+  off.changes_place_fit_of_union = false;
+  std::mt19937_64 rng(5);
+  size_t unfit = 0, with_masks = 0, on_change = 0;
+  for (size_t q = 10; q + 10 < DemoMaps().size(); q += 17) {
+    MemoryCollection collection;
+    Store({q - 5, q + 5}, &collection);
+    LocalMap changed = DemoMaps()[q];
+    const Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
+    if (!change.ok()) continue;
+    const LocalQuery query = PrepareLocalQuery(changed, kOptions);
+    const Localization l = Localize(query, collection, kOptions, {}, {}, /*with_changes=*/true);
+    if (l.verdict.best_score >= kOptions.confidence.min_score) continue;
+    ++unfit;
+    EXPECT_FALSE(l.verdict.sure) << q;
+    EXPECT_TRUE(Localize(query, collection, off, {}, {}, true).changes.empty()) << q;
+    if (l.changes.empty()) continue;
+    ++with_masks;
+    EXPECT_GE(localize_internal::PlaceFit(query, l.hits, l.verdict.best_score, kOptions),
+              kOptions.confidence.min_score) << q;
+    on_change += MaskHitsChange(l.changes[0].points, change->changed_points, 0.5);
+  }
+  ASSERT_GE(unfit, 4u);
+  EXPECT_GE(3 * with_masks, unfit) << with_masks << " of " << unfit << " answers gave masks";
+  EXPECT_GE(3 * on_change, 2 * with_masks) << "the first mask on the change in " << on_change << " of " << with_masks;
+}
+
 // A map of a point or two, or of points on one line, fits somewhere in
 // any stored map and constrains no pose: it is never answered sure.
 TEST(LocalizerTest, AMapOfAFewPointsOrOfOneLineIsNeverSure) {
