@@ -7,7 +7,6 @@
 #pragma once
 
 #include <memory>
-#include <vector>
 
 #include <grpcpp/support/server_interceptor.h>
 
