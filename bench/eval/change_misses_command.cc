@@ -65,7 +65,8 @@ bool PlaceClear(const LocalQuery& query, const Localization& answer, const Local
   const Verdict& v = answer.verdict;
   double fit = v.best_score;
   if (!prior && options.changes_place_fit_of_union && fit < options.confidence.min_score) {
-    fit = std::max(fit, localize_internal::PlaceFit(query, answer.hits, v.best_score, options));
+    fit = std::max(fit, localize_internal::PlaceFit(query, localize_internal::PlaceMaps(answer.hits, v.best_score, options),
+                                                    options));
   }
   return fit >= options.confidence.min_score &&
          (prior || v.best_score - v.rival_score >= options.confidence.min_margin);
@@ -73,15 +74,8 @@ bool PlaceClear(const LocalQuery& query, const Localization& answer, const Local
 
 // What most of the change's points were to the answer's place maps.
 ChangeClass WhyNotFound(const EvalQuery& q, const Localization& answer, const LocalizeOptions& options) {
-  std::vector<const LocalizedHit*> place;
-  for (const LocalizedHit& h : answer.hits) {
-    if (h.agrees_with_best && h.db && h.score >= answer.verdict.best_score - options.confidence.agreement_window) {
-      place.push_back(&h);
-    }
-  }
+  const std::vector<AlignedMap> maps = localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options);
   const GeometricChangeOptions& change = options.changes;
-  std::vector<AlignedMap> maps;
-  for (const LocalizedHit* h : place) maps.push_back({h->db.get(), h->pose, h->map_id});
   GeometricChangeOptions no_floor = change;
   no_floor.min_evidence = 0.0;
   for (const ChangeMask& m : GeometricChanges(q.changed.points, q.changed.trajectory, q.changed.scans, maps, no_floor)) {
@@ -91,10 +85,10 @@ ChangeClass WhyNotFound(const EvalQuery& q, const Localization& answer, const Lo
   size_t explained = 0, unseen = 0, moving = 0;
   for (size_t i = 0; i < q.changed_points.size(); ++i) {
     bool is_explained = false, seen_free = false;
-    for (const LocalizedHit* h : place) {
-      const Point2 p = TransformPoint(h->pose, q.changed_points[i]);
-      is_explained |= NearestPoint(*h->db, p, change.explained_radius_m) >= 0;
-      seen_free |= InFreeSpace(*h->db, p);
+    for (const AlignedMap& m : maps) {
+      const Point2 p = TransformPoint(m.pose, q.changed_points[i]);
+      is_explained |= NearestPoint(*m.db, p, change.explained_radius_m) >= 0;
+      seen_free |= InFreeSpace(*m.db, p);
     }
     const double seen = sightings[i].returns + sightings[i].through;
     if (is_explained) {

@@ -94,19 +94,28 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
   return hits;
 }
 
-double PlaceFit(const LocalQuery& query, const std::vector<LocalizedHit>& hits, double best_score,
-                const LocalizeOptions& options) {
+std::vector<AlignedMap> PlaceMaps(const std::vector<LocalizedHit>& hits, double best_score,
+                                  const LocalizeOptions& options) {
+  std::vector<AlignedMap> place;
+  for (const LocalizedHit& h : hits) {
+    if (h.agrees_with_best && h.db && h.score >= best_score - options.confidence.agreement_window) {
+      place.push_back({h.db.get(), h.pose, h.map_id});
+    }
+  }
+  return place;
+}
+
+double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, const LocalizeOptions& options) {
   const std::vector<Point2>& points = query.match.points;
   if (points.empty()) return 0.0;
   double fit = 0.0;
   for (const Point2& p : points) {
     bool explained = false, in_free_space = false;
-    for (const LocalizedHit& h : hits) {
-      if (!h.agrees_with_best || !h.db || h.score < best_score - options.confidence.agreement_window) continue;
-      const Point2 in_map = TransformPoint(h.pose, p);
-      explained = NearestPoint(*h.db, in_map, options.match.inlier_radius_m) >= 0;
+    for (const AlignedMap& m : place) {
+      const Point2 in_map = TransformPoint(m.pose, p);
+      explained = NearestPoint(*m.db, in_map, options.match.inlier_radius_m) >= 0;
       if (explained) break;
-      in_free_space = in_free_space || InFreeSpace(*h.db, in_map);
+      in_free_space = in_free_space || InFreeSpace(*m.db, in_map);
     }
     fit += explained ? 1.0 : in_free_space ? -options.conflict_weight : 0.0;
   }
@@ -147,27 +156,24 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   out->stats.verdict_ms += MsSince(t);
 
   // A change mask needs the place, not the pose to 0.2 m that a sure answer
-  // promises: masks also where the place is clear, the best hit fitting and
-  // no disagreeing hit within the margin (the verdict's own min_score and
+  // promises: masks also where the place is clear, the place fitting (a
+  // global answer's: its place maps together, changes_place_fit_of_union)
+  // and no disagreeing hit within the margin (the verdict's own min_score and
   // min_margin; a prior's place needs no margin), though the calibrated
   // confidence or the maps' pose spread keep the answer unsure.
   const Verdict& v = out->verdict;
+  const std::vector<AlignedMap> place =
+      with_changes ? PlaceMaps(hits, v.best_score, options) : std::vector<AlignedMap>{};
   double place_fit = v.best_score;
   if (options.changes_place_fit_of_union && !prior_place && with_changes && !v.sure &&
       place_fit < options.confidence.min_score) {
-    place_fit = std::max(place_fit, PlaceFit(query, hits, v.best_score, options));
+    place_fit = std::max(place_fit, PlaceFit(query, place, options));
   }
   const bool place_clear = options.changes_where_place_clear && !cannot_be_sure &&
                            place_fit >= options.confidence.min_score &&
                            (prior_place || v.best_score - v.rival_score >= options.confidence.min_margin);
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
-    std::vector<AlignedMap> place;
-    for (const LocalizedHit& h : hits) {
-      if (h.agrees_with_best && h.score >= out->verdict.best_score - options.confidence.agreement_window) {
-        place.push_back({h.db.get(), h.pose, h.map_id});
-      }
-    }
     out->changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,
                                     options.changes);
     out->stats.changes_ms += MsSince(t);

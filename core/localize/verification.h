@@ -116,13 +116,17 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
                                           const std::function<bool()>& stop, LocalizeStats* stats,
                                           SearchTrace* trace = nullptr);
 
-// The fit of the place the hits agreeing with the best (within the
-// agreement window) show together: the verification score's overlap less
-// conflict_weight times its conflicts, over their union (a query point is
-// explained by any of them; a conflict lies in one's free space and is
-// explained by none). Change masks are made against that union.
-double PlaceFit(const LocalQuery& query, const std::vector<LocalizedHit>& hits, double best_score,
-                const LocalizeOptions& options);
+// The maps of the answer's place: the hits agreeing with the best (within
+// the agreement window), each with the query's pose in it. Change masks are
+// made against them.
+std::vector<AlignedMap> PlaceMaps(const std::vector<LocalizedHit>& hits, double best_score,
+                                  const LocalizeOptions& options);
+
+// How the query fits those maps together: the verification score's overlap
+// less conflict_weight times its conflicts, over their union (a query point
+// is explained by any of them; a conflict lies in one's free space and is
+// explained by none).
+double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, const LocalizeOptions& options);
 
 // The best hit refined, the verdict (with `second_pose`, when set and the
 // verdict would be sure: the best map's score at another pose, a rival),

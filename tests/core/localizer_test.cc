@@ -1166,10 +1166,12 @@ TEST(LocalizerTest, APlaceFitsAsTheMapsAgreeingWithTheBestHitShowItTogether) {
   const PreparedMap whole = PrepareMap(map, kOptions.match.map);
   const PreparedMap left_half = PreparePoints(left, kOptions.match.map);
   const PreparedMap right_half = PreparePoints(right, kOptions.match.map);
-  using localize_internal::PlaceFit;
-  const double own = PlaceFit(query, {hit(whole, true)}, 0.5, kOptions);
-  const double halves = PlaceFit(query, {hit(left_half, true), hit(right_half, true)}, 0.5, kOptions);
-  const double one_half = PlaceFit(query, {hit(left_half, true), hit(right_half, false)}, 0.5, kOptions);
+  auto fit = [](const LocalQuery& q, const std::vector<LocalizedHit>& hits) {
+    return localize_internal::PlaceFit(q, localize_internal::PlaceMaps(hits, 0.5, kOptions), kOptions);
+  };
+  const double own = fit(query, {hit(whole, true)});
+  const double halves = fit(query, {hit(left_half, true), hit(right_half, true)});
+  const double one_half = fit(query, {hit(left_half, true), hit(right_half, false)});
   EXPECT_GT(own, 0.95);
   EXPECT_NEAR(halves, own, 0.02);
   EXPECT_GT(one_half, 0.25);
@@ -1187,7 +1189,7 @@ TEST(LocalizerTest, APlaceFitsAsTheMapsAgreeingWithTheBestHitShowItTogether) {
   const double n = static_cast<double>(query.match.points.size());
   const double added = static_cast<double>(crowded_query.match.points.size()) - n;
   ASSERT_GT(added, 20);
-  EXPECT_NEAR(PlaceFit(crowded_query, {hit(whole, true)}, 0.5, kOptions), (own * n - added) / (n + added), 0.005);
+  EXPECT_NEAR(fit(crowded_query, {hit(whole, true)}), (own * n - added) / (n + added), 0.005);
 }
 
 // Where the robot's place is split over two stored maps (five metres of
@@ -1215,7 +1217,8 @@ TEST(LocalizerTest, APlaceSplitOverTwoMapsGivesItsChangeMasksWhereTheyFitTogethe
     EXPECT_TRUE(Localize(query, collection, off, {}, {}, true).changes.empty()) << q;
     if (l.changes.empty()) continue;
     ++with_masks;
-    EXPECT_GE(localize_internal::PlaceFit(query, l.hits, l.verdict.best_score, kOptions),
+    EXPECT_GE(localize_internal::PlaceFit(query, localize_internal::PlaceMaps(l.hits, l.verdict.best_score, kOptions),
+                                          kOptions),
               kOptions.confidence.min_score) << q;
     on_change += MaskHitsChange(l.changes[0].points, change->changed_points, 0.5);
   }
