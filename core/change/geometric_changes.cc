@@ -151,6 +151,12 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
     DropSeenThrough(CountSightings(changed, query_scans), options.seen_through_share, n, &changed, &evidence,
                     &seen_free);
   }
+  // The evidence a mask needs, given the change points outside it.
+  auto floor = [&](size_t points_in_mask) {
+    if (options.floor_doubling_share <= 0 || query_points.empty()) return options.min_evidence;
+    const double elsewhere = static_cast<double>(changed.size() - points_in_mask) / query_points.size();
+    return options.min_evidence * (1.0 + elsewhere / options.floor_doubling_share);
+  };
   std::vector<ChangeMask> masks;
   for (const std::vector<size_t>& group : LinkedGroups(changed, options.merge_radius_m)) {
     if (group.size() < std::max<size_t>(1, options.min_points)) continue;
@@ -168,7 +174,7 @@ std::vector<ChangeMask> GeometricChanges(const std::vector<Point2>& query_points
     const size_t credited = std::max_element(free_votes.begin(), free_votes.end()) - free_votes.begin();
     mask.db_map_id = placed[credited].map->id;
     mask.score = score;
-    if (score < options.min_evidence) continue;
+    if (score < floor(group.size())) continue;
     masks.push_back(std::move(mask));
   }
   std::stable_sort(masks.begin(), masks.end(), [](const ChangeMask& a, const ChangeMask& b) {

@@ -63,10 +63,18 @@ struct GeometricChangeOptions {
   // logs (seed 2, 80 queries each): 0.615 -> 0.637, no log worse. Row
   // abl_keep_moving.
   double seen_through_share = 0.2;
-  // Masks with less evidence (the ranking score above) are not reported:
-  // a few points at the edge of the free space, or far from the robot, are
-  // what a small misalignment or a grazing beam leaves. 0: all reported.
+  // Masks with less evidence (the ranking score above) than a floor are not
+  // reported: a few points at the edge of the free space, or far from the
+  // robot, are what a small misalignment or a grazing beam leaves. The floor
+  // is min_evidence where the stored maps explain the rest of the query, and
+  // rises by min_evidence for every floor_doubling_share of the query's
+  // points that are change points outside the mask: an alignment that leaves
+  // much of the query unexplained (a pose a little off, a place changed at
+  // large, maps of another time) makes small masks by chance, a clean one
+  // does not, so there a small mask is a change. 0: all reported;
+  // floor_doubling_share <= 0: the floor is min_evidence.
   double min_evidence = 0.0;
+  double floor_doubling_share = 0.0;
 };
 
 // A stored map the query was aligned to.

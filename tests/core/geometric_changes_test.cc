@@ -186,6 +186,48 @@ TEST(GeometricChangesTest, WellObservedChangesOutrankLargerOnesFarAwayOrAtTheEdg
   }
 }
 
+// A small object next to the robot is reported where the stored map explains
+// the rest of the query, and not where as much of the query again is
+// unexplained elsewhere (scattered points in its free space, as a pose a
+// little off leaves): there the floor of evidence is raised, and a fixed
+// floor (floor_doubling_share 0) keeps the object either way.
+TEST(GeometricChangesTest, TheEvidenceFloorRisesWithWhatIsUnexplainedElsewhere) {
+  int tried = 0;
+  for (size_t i = 0; i < DemoMaps().size() && tried < 3; i += 19) {
+    const LocalMap& map = DemoMaps()[i];
+    const PreparedMap db = PrepareMap(map);
+    const std::vector<Point2> near = FreeCells(map, db, true, 0.5, 2.0);
+    if (near.empty()) continue;
+    const Point2 a = near.front();
+    LocalMap clean = map;
+    for (int k = 0; k < 4; ++k) clean.points.push_back({a.x + 0.02 * k, a.y});
+    // Points alone in free space, more than merge_radius_m from each other
+    // and from the object: change points that form no mask.
+    LocalMap noisy = clean;
+    size_t scattered = 0;
+    for (const Point2& c : FreeCells(map, db, false, 0.5, 1e9)) {
+      bool apart = std::hypot(c.x - a.x, c.y - a.y) > 2.0;
+      for (size_t k = clean.points.size(); k < noisy.points.size() && apart; ++k) {
+        apart = std::hypot(c.x - noisy.points[k].x, c.y - noisy.points[k].y) > 1.5;
+      }
+      if (apart) noisy.points.push_back(c), ++scattered;
+    }
+    if (scattered < 5) continue;
+    ++tried;
+    const std::vector<ChangeMask> unfloored = GeometricChanges(clean.points, clean.trajectory, {}, {{&db, Pose2{}, 1}});
+    ASSERT_EQ(unfloored.size(), 1u) << map.id;
+    GeometricChangeOptions fixed;
+    fixed.min_evidence = 0.9 * unfloored[0].score;
+    GeometricChangeOptions rising = fixed;
+    // The scattered points double the floor.
+    rising.floor_doubling_share = static_cast<double>(scattered) / noisy.points.size();
+    EXPECT_EQ(GeometricChanges(clean.points, clean.trajectory, {}, {{&db, Pose2{}, 1}}, rising).size(), 1u) << map.id;
+    EXPECT_TRUE(GeometricChanges(noisy.points, noisy.trajectory, {}, {{&db, Pose2{}, 1}}, rising).empty()) << map.id;
+    EXPECT_EQ(GeometricChanges(noisy.points, noisy.trajectory, {}, {{&db, Pose2{}, 1}}, fixed).size(), 1u) << map.id;
+  }
+  EXPECT_EQ(tried, 3);
+}
+
 // Poses that are not finite give no range (as no trajectory), never NaN scores.
 TEST(GeometricChangesTest, ANonFiniteTrajectoryRanksAsNoTrajectory) {
   std::mt19937_64 rng(3);
