@@ -161,7 +161,11 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   builder.RegisterService(server->service_.get());
   if (server->replica_service_) builder.RegisterService(server->replica_service_.get());
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
-  interceptors.push_back(ParseErrorInterceptors());  // requests that do not parse: INVALID_ARGUMENT
+  CallRunner* runner = server->runner_.get();
+  interceptors.push_back(ParseErrorInterceptors(  // requests that do not parse: INVALID_ARGUMENT
+      [runner](const std::string& method, const grpc::Status& status, double ms) {
+        runner->Finished(method.c_str(), "-", "", status, ms);
+      }));
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
   server->server_ = builder.BuildAndStart();
   if (!server->server_ || server->port_ == 0) {

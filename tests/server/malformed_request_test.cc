@@ -1,7 +1,8 @@
 // Request bytes that do not parse as their method's message get
 // INVALID_ARGUMENT naming the message (server/parse_errors.h), unary or
-// streamed (server/stream_insert.h), and lmdd serves the next call. The
-// calls are made with gRPC's generic stub, which sends bytes as they are.
+// streamed (server/stream_insert.h), counted as calls with errors, and lmdd
+// serves the next call. The calls are made with gRPC's generic stub, which
+// sends bytes as they are.
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
@@ -86,6 +87,17 @@ TEST(MalformedRequestTest, BytesThatAreNoRequestAreNamedAsSuch) {
             grpc::StatusCode::UNIMPLEMENTED);
   // The same bytes, parsed, are a request again: an empty ListCollections.
   EXPECT_TRUE(UnaryBytes(server.address(), "/lmd.v1.LmdService/ListCollections", "").ok());
+  // No handler saw the calls that did not parse; they count as calls with errors all the same.
+  v1::StatsResponse stats;
+  ASSERT_TRUE(server.client().Stats(v1::StatsRequest(), &stats).ok());
+  size_t counted = 0;
+  for (const v1::MethodStats& m : stats.methods()) {
+    if (m.method() != "Retrieve" && m.method() != "InsertMaps") continue;
+    ++counted;
+    EXPECT_EQ(m.calls(), 1u) << m.method();
+    EXPECT_EQ(m.errors(), 1u) << m.method();
+  }
+  EXPECT_EQ(counted, 2u);
 }
 
 TEST(MalformedRequestTest, AStreamEndsAtAMessageThatDoesNotParseAndKeepsTheMapsBeforeIt) {
