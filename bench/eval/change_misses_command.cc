@@ -21,7 +21,8 @@
 // Before those, "weak": the masks against the same maps without the
 // evidence floor (GeometricChangeOptions::min_evidence) hit the change. The
 // masks lmdd returned, and those of them that miss the change or are
-// credited to a map that does not show the place (false), are counted too.
+// credited to a map that does not show the place (false), are counted too,
+// also for changed queries whose place no stored map shows (no task).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -114,8 +115,11 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
   ProgressBar bar(d.name + ": changed queries", d.queries.size());
   for (const EvalQuery& q : d.queries) {
     bar.Add();
-    if (q.places.empty() || !q.change_ok || q.changed.points.empty()) continue;
-    ++counts.tasks;
+    if (!q.change_ok || q.changed.points.empty()) continue;
+    // A query whose place no stored map shows is no task, but its masks are
+    // false alarms all the same (as lmd-eval served counts them).
+    const bool task = !q.places.empty();
+    counts.tasks += task;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
     auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
     const LocalQuery query = PrepareLocalQuery(q.changed, options);
@@ -141,6 +145,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
       ++counts.masks;
       counts.false_masks += !finds;
     }
+    if (!task) continue;
     if (!c) {
       const bool right_place = !answer.hits.empty() && d.ShowsPlace(q, answer.hits[0].map_id);
       if (answer.changes.empty() && !right_place) {
