@@ -58,21 +58,6 @@ struct ChangeCounts {
   size_t classes[kClasses] = {};
 };
 
-// Whether lmdd computed masks for an answer that is not sure (Conclude in
-// core/localize/localizer.cc): its place fits (a prior's: its best hit; a
-// global answer's: the maps agreeing with its best hit together) and, but
-// for a prior's answer, no disagreeing hit comes within the margin.
-bool PlaceClear(const LocalQuery& query, const Localization& answer, const LocalizeOptions& options, bool prior) {
-  const Verdict& v = answer.verdict;
-  double fit = v.best_score;
-  if (!prior && options.changes_place_fit_of_union && fit < options.confidence.min_score) {
-    fit = std::max(fit, localize_internal::PlaceFit(query, localize_internal::PlaceMaps(answer.hits, v.best_score, options),
-                                                    options));
-  }
-  return fit >= options.confidence.min_score &&
-         (prior || v.best_score - v.rival_score >= options.confidence.min_margin);
-}
-
 // What most of the change's points were to the answer's place maps.
 ChangeClass WhyNotFound(const EvalQuery& q, const Localization& answer, const LocalizeOptions& options) {
   const std::vector<AlignedMap> maps = localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options);
@@ -152,7 +137,10 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
         c = kWrongPlace;
       } else if (hits_change) {
         c = kCreditedAway;
-      } else if (answer.changes.empty() && !answer.verdict.sure && !PlaceClear(query, answer, options, !global)) {
+      } else if (answer.changes.empty() && !answer.verdict.sure &&
+                 !localize_internal::PlaceClear(
+                     query, answer.hits, answer.verdict,
+                     localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options), options, !global)) {
         c = kNoMasks;
       } else {
         c = WhyNotFound(q, answer, options);

@@ -122,6 +122,18 @@ double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, c
   return fit / static_cast<double>(points.size());
 }
 
+bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, const Verdict& verdict,
+                const std::vector<AlignedMap>& place, const LocalizeOptions& options, bool prior_place) {
+  if (hits.empty()) return false;
+  const double min_score = options.confidence.min_score;
+  double fit = verdict.best_score;
+  if (options.changes_place_fit_before_conflicts) fit = std::max(fit, hits[0].overlap);
+  if (options.changes_place_fit_of_union && !prior_place && fit < min_score) {
+    fit = std::max(fit, PlaceFit(query, place, options));
+  }
+  return fit >= min_score && (prior_place || verdict.best_score - verdict.rival_score >= options.confidence.min_margin);
+}
+
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
               Localization* out, bool prior_place) {
@@ -156,22 +168,13 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   out->stats.verdict_ms += MsSince(t);
 
   // A change mask needs the place, not the pose to 0.2 m that a sure answer
-  // promises: masks also where the place is clear, the place fitting (a
-  // global answer's: its place maps together, changes_place_fit_of_union)
-  // and no disagreeing hit within the margin (the verdict's own min_score and
-  // min_margin; a prior's place needs no margin), though the calibrated
-  // confidence or the maps' pose spread keep the answer unsure.
+  // promises: masks also where the place is clear (PlaceClear), though the
+  // calibrated confidence or the maps' pose spread keep the answer unsure.
   const Verdict& v = out->verdict;
   const std::vector<AlignedMap> place =
       with_changes ? PlaceMaps(hits, v.best_score, options) : std::vector<AlignedMap>{};
-  double place_fit = v.best_score;
-  if (options.changes_place_fit_of_union && !prior_place && with_changes && !v.sure &&
-      place_fit < options.confidence.min_score) {
-    place_fit = std::max(place_fit, PlaceFit(query, place, options));
-  }
-  const bool place_clear = options.changes_where_place_clear && !cannot_be_sure &&
-                           place_fit >= options.confidence.min_score &&
-                           (prior_place || v.best_score - v.rival_score >= options.confidence.min_margin);
+  const bool place_clear = with_changes && options.changes_where_place_clear && !cannot_be_sure && !v.sure &&
+                           PlaceClear(query, hits, v, place, options, prior_place);
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
     out->changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,

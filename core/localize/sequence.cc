@@ -177,6 +177,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   judged.refine_best = false;  // a refinement would score the newest map alone
   judged.fuse_site_pose = false;  // its hits are hypotheses, each the newest map's best at one
   judged.changes_place_fit_of_union = false;  // ... so their union is no place either
+  judged.changes_place_fit_before_conflicts = false;  // a hit's overlap is the newest map's, its score the sequence's
   judged.confidence.min_score = std::max(options.confidence.min_score, options.confidence.sequence_min_score);
   judged.confidence.min_confidence = 0.0;  // fitted to single maps' scores, not a sequence's mean
   // The newest map's best fit elsewhere in the best hit's map is a rival: in

@@ -128,6 +128,16 @@ std::vector<AlignedMap> PlaceMaps(const std::vector<LocalizedHit>& hits, double 
 // explained by none).
 double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, const LocalizeOptions& options);
 
+// Whether an answer that is not sure still gets change masks: its place
+// fits (the best hit's score, or with changes_place_fit_before_conflicts its
+// overlap, or a global answer's `place` maps together with
+// changes_place_fit_of_union, reaches the verdict's min_score) and, but for
+// a prior's answer (`prior_place`: LocalizeOptions::prior_changes_without_margin),
+// no disagreeing hit comes within the verdict's min_margin. `hits` best
+// first; `place`: PlaceMaps of them.
+bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, const Verdict& verdict,
+                const std::vector<AlignedMap>& place, const LocalizeOptions& options, bool prior_place);
+
 // The best hit refined, the verdict (with `second_pose`, when set and the
 // verdict would be sure: the best map's score at another pose, a rival),
 // the change masks when asked and sure or the place is clear (`prior_place`:

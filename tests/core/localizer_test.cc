@@ -1146,6 +1146,36 @@ TEST(LocalizerTest, APriorsAnswerGivesItsChangeMasksWhereItsBestHitFitsWhateverT
   EXPECT_GE(2 * with_masks, tasks) << with_masks << " of " << tasks << " prior answers gave masks";
 }
 
+// A place is clear for change masks where its best hit explains enough of
+// the query before its conflicts are subtracted: a large change is conflicts,
+// and would otherwise hide itself. Without a prior, a rival within the
+// margin still keeps the place unclear; the options off, the score decides.
+TEST(LocalizerTest, APlaceIsClearForMasksWhereItsBestHitExplainsEnoughBeforeConflicts) {
+  const LocalQuery query = PrepareLocalQuery(DemoMaps()[40], kOptions);
+  LocalizedHit best;
+  best.score = 0.5;   // below min_score: conflicts subtracted
+  best.overlap = 0.7;
+  const std::vector<LocalizedHit> hits = {best};
+  Verdict verdict;
+  verdict.best_score = best.score;
+  LocalizeOptions score_only = kOptions;
+  score_only.changes_place_fit_before_conflicts = false;
+  score_only.changes_place_fit_of_union = false;
+  using localize_internal::PlaceClear;
+  for (const bool prior : {true, false}) {
+    SCOPED_TRACE(prior ? "prior" : "global");
+    EXPECT_TRUE(PlaceClear(query, hits, verdict, {}, kOptions, prior));
+    EXPECT_FALSE(PlaceClear(query, hits, verdict, {}, score_only, prior));
+  }
+  Verdict rivalled = verdict;
+  rivalled.rival_score = 0.45;
+  EXPECT_FALSE(PlaceClear(query, hits, rivalled, {}, kOptions, /*prior_place=*/false));
+  EXPECT_TRUE(PlaceClear(query, hits, rivalled, {}, kOptions, /*prior_place=*/true));
+  LocalizedHit little = best;
+  little.overlap = 0.55;  // below min_score either way
+  EXPECT_FALSE(PlaceClear(query, {little}, verdict, {}, kOptions, /*prior_place=*/true));
+}
+
 // The place's fit over the maps agreeing with the best: a query split over
 // two stored maps fits the two together as it fits its own map, though each
 // shows about half of it; a hit that does not agree adds nothing; a query
@@ -1199,10 +1229,12 @@ TEST(LocalizerTest, APlaceFitsAsTheMapsAgreeingWithTheBestHitShowItTogether) {
 // the first mostly on the change. With changes_place_fit_of_union off, such
 // answers give none. (Which answers give masks is the point here, not how
 // many of them pass the evidence floor: the floor is held fixed, as the part
-// of the query neither map saw raises it otherwise.)
+// of the query neither map saw raises it otherwise; and the best hit's own
+// overlap, which may make the place fit alone, is not asked.)
 TEST(LocalizerTest, APlaceSplitOverTwoMapsGivesItsChangeMasksWhereTheyFitTogether) {
   LocalizeOptions options = kOptions;
   options.changes.floor_doubling_share = 0;
+  options.changes_place_fit_before_conflicts = false;
   LocalizeOptions off = options;
   off.changes_place_fit_of_union = false;
   std::mt19937_64 rng(5);
