@@ -6,6 +6,7 @@
 
 #include "core/align/scan_match.h"
 #include "core/eval/retrieval_metrics.h"
+#include "core/localmap/pose_ops.h"
 
 namespace lmd::eval {
 
@@ -49,6 +50,16 @@ const char* RivalName(RivalKind kind) {
   return "?";
 }
 
+bool MaskFindsChange(const Dataset& d, const EvalQuery& q, const std::vector<Point2>& points, size_t db,
+                     const Pose2& pose) {
+  if (!q.change_ok || !MaskHitsChange(points, q.changed_points, kMaskHitM)) return false;
+  const Pose2 truth = d.TruePose(q.map, db);
+  return std::all_of(points.begin(), points.end(), [&](const Point2& p) {
+    const Point2 answered = TransformPoint(pose, p), true_place = TransformPoint(truth, p);
+    return std::hypot(answered.x - true_place.x, answered.y - true_place.y) <= kMaskHitM;
+  });
+}
+
 AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& answer, bool changed) {
   AnswerOutcome o;
   o.place_counted = !q.places.empty();
@@ -78,7 +89,7 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
   if (changed) {
     for (size_t r = 0; r < answer.masks.size(); ++r) {
       const Answer::Mask& m = answer.masks[r];
-      const bool finds = q.change_ok && d.ShowsPlace(q, m.db) && MaskHitsChange(m.points, q.changed_points, kMaskHitM);
+      const bool finds = MaskFindsChange(d, q, m.points, m.db, m.pose);
       if (finds && o.first_change_mask == 0) o.first_change_mask = r + 1;
       o.false_masks += !finds;
     }

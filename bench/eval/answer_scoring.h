@@ -19,7 +19,8 @@ namespace lmd::eval {
 inline constexpr double kSurePoseM = 0.2;
 inline constexpr double kSurePoseDeg = 1.0;
 // A change mask finds the change when one of its points is this close to a
-// changed point (and its hit shows the place).
+// changed point and its hit's pose puts every one of its points this close to
+// where the truth puts them in the hit's map (MaskFindsChange).
 inline constexpr double kMaskHitM = 0.5;
 
 // A sure answer's pose this close to the truth, the place right, is a near
@@ -48,6 +49,7 @@ struct Answer {
   };
   struct Mask {
     size_t db = 0;  // the hit it is credited to
+    Pose2 pose;     // that hit's pose: query own frame in the db map's own frame
     std::vector<Point2> points;  // query own frame
   };
   std::vector<Hit> hits;    // best first
@@ -87,6 +89,16 @@ struct AnswerOutcome {
   size_t masks = 0, false_masks = 0;  // masks returned; of them, those that find no change of a right hit
   double cpu_ms = 0.0, wall_ms = 0.0;
 };
+
+// Whether a change mask (`points`, query own frame) credited to stored map
+// `db` at `pose` finds the query's simulated change: it touches the change
+// (kMaskHitM), and `pose` places it in the map where the truth does (each of
+// its points within kMaskHitM). A mask claims its points are new where the
+// stored map saw free space; that claim is right whether or not the map
+// shows the rest of the query (the place rule of place recall), and a hit at
+// a wrong place cannot place it right.
+bool MaskFindsChange(const Dataset& d, const EvalQuery& q, const std::vector<Point2>& points, size_t db,
+                     const Pose2& pose);
 
 // `changed`: the answer is to the query's changed copy (q.changed).
 AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& answer, bool changed);

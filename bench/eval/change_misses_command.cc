@@ -10,8 +10,8 @@
 //                  place clear (its place fits and, without a prior, no
 //                  disagreeing hit comes within the margin);
 //   wrong place    no masks, and the top hit does not show the place;
-//   credited away  a mask hits the change but is credited to a stored map
-//                  that does not show the place (the protocol counts it false);
+//   misplaced      a mask hits the change but the pose of the hit it is
+//                  credited to puts it elsewhere in that map (MaskFindsChange);
 // and otherwise, by what most of the change's points were to the maps of the
 // answer's place (those agreeing with its best hit, as change masks use):
 //   explained      a map has a point within explained_radius_m of them;
@@ -20,9 +20,9 @@
 //   few            none of those, but too few of them were kept to form a mask.
 // Before those, "weak": the masks against the same maps without the
 // evidence floor (GeometricChangeOptions::min_evidence) hit the change. The
-// masks lmdd returned, and those of them that miss the change or are
-// credited to a map that does not show the place (false), are counted too,
-// also for changed queries whose place no stored map shows (no task).
+// masks lmdd returned (those of the hits it returns), and those of them that
+// do not find the change (false), are counted too, also for changed queries
+// whose place no stored map shows (no task).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -48,8 +48,8 @@
 namespace lmd::eval {
 namespace {
 
-enum ChangeClass { kTop, kLower, kNoMasks, kWrongPlace, kCreditedAway, kWeak, kExplained, kUnseen, kMoving, kFew, kClasses };
-const char* const kClassNames[kClasses] = {"top",  "lower",     "no masks", "wrong place", "credited away",
+enum ChangeClass { kTop, kLower, kNoMasks, kWrongPlace, kMisplaced, kWeak, kExplained, kUnseen, kMoving, kFew, kClasses };
+const char* const kClassNames[kClasses] = {"top",  "lower",     "no masks", "wrong place", "misplaced",
                                            "weak", "explained", "unseen",   "moving",      "few"};
 
 struct ChangeCounts {
@@ -102,7 +102,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
     bar.Add();
     if (!q.change_ok || q.changed.points.empty()) continue;
     // A query whose place no stored map shows is no task, but its masks are
-    // false alarms all the same (as lmd-eval served counts them).
+    // counted (as lmd-eval served counts them).
     const bool task = !q.places.empty();
     counts.tasks += task;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
@@ -121,12 +121,15 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
     }
     std::optional<ChangeClass> c;
     bool hits_change = false;
-    for (size_t r = 0; r < answer.changes.size(); ++r) {
-      const ChangeMask& m = answer.changes[r];
-      const bool hits = MaskHitsChange(m.points, q.changed_points, kMaskHitM);
-      hits_change |= hits;
-      const bool finds = hits && d.ShowsPlace(q, m.db_map_id);
-      if (finds && !c) c = r == 0 ? kTop : kLower;
+    size_t rank = 0;  // of the masks lmdd would send: those of returned hits
+    for (const ChangeMask& m : answer.changes) {
+      const auto hit = std::find_if(answer.hits.begin(), answer.hits.end(),
+                                    [&](const LocalizedHit& h) { return h.map_id == m.db_map_id; });
+      if (hit == answer.hits.end()) continue;
+      hits_change |= MaskHitsChange(m.points, q.changed_points, kMaskHitM);
+      const bool finds = MaskFindsChange(d, q, m.points, m.db_map_id, hit->pose);
+      if (finds && !c) c = rank == 0 ? kTop : kLower;
+      ++rank;
       ++counts.masks;
       counts.false_masks += !finds;
     }
@@ -136,7 +139,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
       if (answer.changes.empty() && !right_place) {
         c = kWrongPlace;
       } else if (hits_change) {
-        c = kCreditedAway;
+        c = kMisplaced;
       } else if (answer.changes.empty() && !answer.verdict.sure &&
                  !localize_internal::PlaceClear(
                      query, answer.hits, answer.verdict,

@@ -400,7 +400,12 @@ Answer ToAnswer(const Localization& l, double cpu_ms) {
   a.localized = l.verdict.sure;
   a.confidence = l.verdict.confidence;
   a.rival_score = l.verdict.rival_score;
-  for (const ChangeMask& m : l.changes) a.masks.push_back({static_cast<size_t>(m.db_map_id), m.points});
+  for (const ChangeMask& m : l.changes) {
+    const auto hit = std::find_if(l.hits.begin(), l.hits.end(),
+                                  [&](const LocalizedHit& h) { return h.map_id == m.db_map_id; });
+    if (hit == l.hits.end()) continue;  // its map is past top_k: lmdd could not send it either
+    a.masks.push_back({static_cast<size_t>(m.db_map_id), hit->pose, m.points});
+  }
   a.cpu_ms = cpu_ms;
   return a;
 }

@@ -130,6 +130,7 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
     for (const v1::ChangeMask& m : change_hit.masks()) {
       Answer::Mask mask;
       mask.db = h.db;
+      mask.pose = h.pose;
       for (int i = 0; i < m.x_size(); ++i) mask.points.push_back({m.x(i), m.y(i)});
       masks.push_back({m.rank(), std::move(mask)});
     }
