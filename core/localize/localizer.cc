@@ -128,7 +128,7 @@ bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, 
   const double min_score = options.confidence.min_score;
   double fit = verdict.best_score;
   if (options.changes_place_fit_before_conflicts) fit = std::max(fit, hits[0].overlap);
-  if (options.changes_place_fit_of_union && !prior_place && fit < min_score) {
+  if (options.changes_place_fit_of_union && fit < min_score) {
     fit = std::max(fit, PlaceFit(query, place, options));
   }
   return fit >= min_score && (prior_place || verdict.best_score - verdict.rival_score >= options.confidence.min_margin);

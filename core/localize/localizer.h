@@ -169,22 +169,24 @@ struct LocalizeOptions {
   // 11.5 %). A best hit at 0.5 instead of min_score: tracking .633 at 8.5 %
   // false, 0.4: .663 at 12.1 %.
   bool prior_changes_without_margin = true;
-  // Whether a global answer's place fits, for change masks, is asked of the
-  // maps agreeing with its best hit together, the maps the masks are made
+  // Whether an answer's place fits, for change masks, is asked of the maps
+  // agreeing with its best hit together, the maps the masks are made
   // against (PlaceFit, verification.h), where the best hit alone falls below
   // confidence.min_score: a place the robot saw whole and the stored maps
-  // each saw in part fits as a place, though no one map does. The margin is
-  // still the best hit's. A prior's answer, asked no margin, keeps its best
-  // hit's fit: with the union there too, served --mode tracking gave the
-  // true change in the top mask .553 -> .642 but 6.9 -> 11.4 % false masks
-  // (edmonton 1.0 -> 19.2 %), over the 10 % bound. No threshold of its own;
+  // each saw in part fits as a place, though no one map does. A global
+  // answer still needs its best hit's margin. No threshold of its own;
   // decided on all nine logs. Served (lmd-eval served, with changes,
-  // 2026-12-06, back to back; every other answer the same): true change in
-  // the top mask held out .405 -> .441 (tuned on .352 -> .366), false masks
-  // held out 5.7 -> 7.1 % (tuned on 5.8 -> 7.0 %). With the evidence floor
-  // of `changes` (above), a prior's answer with the union again (--mode
-  // tracking): .615 -> .703, false masks tuned on 6.8 -> 7.2 %, but held out
-  // 4.8 -> 10.5 % (edmonton 1.0 -> 17.9 %): still not for priors.
+  // 2026-12-06, back to back; every other answer the same): global, true
+  // change in the top mask held out .405 -> .441 (tuned on .352 -> .366),
+  // false masks held out 5.7 -> 7.1 % (tuned on 5.8 -> 7.0 %). A prior's
+  // answer too since the fifteenth stop (2026-12-06): the false alarms that
+  // had kept it out (--mode tracking, edmonton 1.0 -> 17.9 %) were masks on
+  // the change, counted false because their maps each showed less than half
+  // the query (lmd-eval's mask rule before ef573ea). Served, with changes,
+  // back to back: --mode tracking, top mask tuned on .649 -> .690 (held out
+  // .665 -> .722), false masks tuned on 7.6 -> 7.8 % (held out 6.2 -> 6.8
+  // %); --mode prior, .637 -> .674 (.644 -> .705), false 7.8 -> 8.3 % (7.1
+  // -> 7.6 %).
   bool changes_place_fit_of_union = true;
   // Whether the place fits, for change masks, is also asked of the best
   // hit's overlap (the share of the query its map explains), not only of

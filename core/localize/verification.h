@@ -130,7 +130,7 @@ double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, c
 
 // Whether an answer that is not sure still gets change masks: its place
 // fits (the best hit's score, or with changes_place_fit_before_conflicts its
-// overlap, or a global answer's `place` maps together with
+// overlap, or its `place` maps together with
 // changes_place_fit_of_union, reaches the verdict's min_score) and, but for
 // a prior's answer (`prior_place`: LocalizeOptions::prior_changes_without_margin),
 // no disagreeing hit comes within the verdict's min_margin. `hits` best

@@ -1224,43 +1224,56 @@ TEST(LocalizerTest, APlaceFitsAsTheMapsAgreeingWithTheBestHitShowItTogether) {
 
 // Where the robot's place is split over two stored maps (five metres of
 // route before and after its own, the maps between left out), neither fits
-// the changed query on its own, so a global answer is not sure; its masks
-// still come where the two fit together and no rival is within the margin,
-// the first mostly on the change. With changes_place_fit_of_union off, such
-// answers give none. (Which answers give masks is the point here, not how
-// many of them pass the evidence floor: the floor is held fixed, as the part
-// of the query neither map saw raises it otherwise; and the best hit's own
-// overlap, which may make the place fit alone, is not asked.)
+// the changed query on its own, so the answer is not sure, with a prior or
+// without; its masks still come where the two fit together (without a
+// prior, where no rival is within the margin), the first mostly on the
+// change. With changes_place_fit_of_union off, such answers give none.
+// (Which answers give masks is the point here, not how many of them pass the
+// evidence floor: the floor is held fixed, as the part of the query neither
+// map saw raises it otherwise; and the best hit's own overlap, which may
+// make the place fit alone, is not asked.)
 TEST(LocalizerTest, APlaceSplitOverTwoMapsGivesItsChangeMasksWhereTheyFitTogether) {
   LocalizeOptions options = kOptions;
   options.changes.floor_doubling_share = 0;
   options.changes_place_fit_before_conflicts = false;
   LocalizeOptions off = options;
   off.changes_place_fit_of_union = false;
-  std::mt19937_64 rng(5);
-  size_t unfit = 0, with_masks = 0, on_change = 0;
-  for (size_t q = 10; q + 10 < DemoMaps().size(); q += 17) {
-    MemoryCollection collection;
-    Store({q - 5, q + 5}, &collection);
-    LocalMap changed = DemoMaps()[q];
-    const Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
-    if (!change.ok()) continue;
-    const LocalQuery query = PrepareLocalQuery(changed, options);
-    const Localization l = Localize(query, collection, options, {}, {}, /*with_changes=*/true);
-    if (l.verdict.best_score >= kOptions.confidence.min_score) continue;
-    ++unfit;
-    EXPECT_FALSE(l.verdict.sure) << q;
-    EXPECT_TRUE(Localize(query, collection, off, {}, {}, true).changes.empty()) << q;
-    if (l.changes.empty()) continue;
-    ++with_masks;
-    EXPECT_GE(localize_internal::PlaceFit(query, localize_internal::PlaceMaps(l.hits, l.verdict.best_score, options),
-                                          options),
-              options.confidence.min_score) << q;
-    on_change += MaskHitsChange(l.changes[0].points, change->changed_points, 0.5);
+  for (const bool with_prior : {false, true}) {
+    SCOPED_TRACE(with_prior ? "a tracking robot's prior" : "global");
+    std::mt19937_64 rng(5);
+    size_t unfit = 0, with_masks = 0, on_change = 0;
+    for (size_t q = 10; q + 10 < DemoMaps().size(); q += 17) {
+      MemoryCollection collection;
+      if (with_prior) {
+        StoreAnchored({q - 5, q + 5}, &collection);
+      } else {
+        Store({q - 5, q + 5}, &collection);
+      }
+      LocalMap changed = DemoMaps()[q];
+      const Result<SimulatedChange> change = ApplySimulatedChange(changed, rng);
+      if (!change.ok()) continue;
+      const LocalQuery query = PrepareLocalQuery(changed, options);
+      const Prior prior = PriorOff(changed.truth.global_frame, {0.2, -0.1, 1.5}, 0.4, 3.0);
+      auto localize = [&](const LocalizeOptions& o) {
+        return with_prior ? LocalizeNear(query, collection, o, prior, {}, {}, /*with_changes=*/true)
+                          : Localize(query, collection, o, {}, {}, /*with_changes=*/true);
+      };
+      const Localization l = localize(options);
+      if (l.verdict.best_score >= kOptions.confidence.min_score) continue;
+      ++unfit;
+      EXPECT_FALSE(l.verdict.sure) << q;
+      EXPECT_TRUE(localize(off).changes.empty()) << q;
+      if (l.changes.empty()) continue;
+      ++with_masks;
+      EXPECT_GE(localize_internal::PlaceFit(
+                    query, localize_internal::PlaceMaps(l.hits, l.verdict.best_score, options), options),
+                options.confidence.min_score) << q;
+      on_change += MaskHitsChange(l.changes[0].points, change->changed_points, 0.5);
+    }
+    ASSERT_GE(unfit, 4u);
+    EXPECT_GE(3 * with_masks, unfit) << with_masks << " of " << unfit << " answers gave masks";
+    EXPECT_GE(3 * on_change, 2 * with_masks) << "the first mask on the change in " << on_change << " of " << with_masks;
   }
-  ASSERT_GE(unfit, 4u);
-  EXPECT_GE(3 * with_masks, unfit) << with_masks << " of " << unfit << " answers gave masks";
-  EXPECT_GE(3 * on_change, 2 * with_masks) << "the first mask on the change in " << on_change << " of " << with_masks;
 }
 
 // A map of a point or two, or of points on one line, fits somewhere in
