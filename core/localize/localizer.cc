@@ -134,9 +134,30 @@ bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, 
   return fit >= min_score && (prior_place || verdict.best_score - verdict.rival_score >= options.confidence.min_margin);
 }
 
+std::vector<AlignedMap> WithSiteMaps(const LocalQuery& query, const LocalizedHit& best, std::vector<AlignedMap> place,
+                                     const SiteMaps& site, const LocalizeOptions& options,
+                                     std::vector<std::shared_ptr<const PreparedMap>>* kept) {
+  if (!site.source || !site.excluded || !best.collection_pose || options.changes_site_maps == 0) return place;
+  const Pose2& at = *best.collection_pose;
+  std::vector<Point2> path;
+  for (const Pose2& p : query.source.trajectory) path.push_back(TransformPoint(at, {p.x, p.y}));
+  if (path.empty()) path.push_back({at.x, at.y});
+  for (const MapSource::Anchored& a :
+       site.source->NearestAnchored(path, QueryReach(query), options.changes_site_maps, *site.excluded)) {
+    const bool placed =
+        std::any_of(place.begin(), place.end(), [&](const AlignedMap& m) { return m.id == a.map_id; });
+    if (placed) continue;
+    std::shared_ptr<const PreparedMap> db = site.source->Prepared(a.map_id);
+    if (!db) continue;
+    place.push_back({db.get(), Compose(Inverse(a.pose), at), best.map_id});
+    kept->push_back(std::move(db));
+  }
+  return place;
+}
+
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
-              Localization* out, bool prior_place) {
+              Localization* out, bool prior_place, const SiteMaps& site_maps) {
   auto t = Clock::now();
   if (!hits.empty() && options.refine_best) {
     LocalizedHit& best = hits[0];
@@ -177,8 +198,9 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
                            PlaceClear(query, hits, v, place, options, prior_place);
   if (with_changes && (v.sure || place_clear)) {
     t = Clock::now();
-    out->changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans, place,
-                                    options.changes);
+    std::vector<std::shared_ptr<const PreparedMap>> kept;
+    out->changes = GeometricChanges(query.source.points, query.source.trajectory, query.source.scans,
+                                    WithSiteMaps(query, hits[0], place, site_maps, options, &kept), options.changes);
     out->stats.changes_ms += MsSince(t);
   }
   const std::optional<Pose2> site = options.fuse_site_pose ? FusedSitePose(hits, options.confidence) : std::nullopt;

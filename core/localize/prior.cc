@@ -384,7 +384,8 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       return closer_rival ? std::max(far, other_pose(best, options.prior_near_rival_m)) : far;
     };
   }
-  Conclude(query, judged, std::move(hits), second_pose, with_changes, &out, options.prior_changes_without_margin);
+  Conclude(query, judged, std::move(hits), second_pose, with_changes, &out, options.prior_changes_without_margin,
+           SiteMaps{&source, &excluded});
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;
   return out;

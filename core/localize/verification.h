@@ -138,14 +138,31 @@ double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, c
 bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, const Verdict& verdict,
                 const std::vector<AlignedMap>& place, const LocalizeOptions& options, bool prior_place);
 
+// The anchored maps a prior's answer also makes its change masks against
+// (LocalizeOptions::changes_site_maps), and the maps `excluded` leaves out.
+struct SiteMaps {
+  const MapSource* source = nullptr;
+  const std::function<bool(uint64_t)>* excluded = nullptr;
+};
+
+// `place` and, of the changes_site_maps anchored maps (none `excluded`)
+// whose robots drove nearest the query's path at `best`'s site pose, those
+// not in it, each at the pose its anchor gives the query and credited to
+// `best` (lmdd sends masks under returned hits). `place` alone where `best`
+// has no site pose. *kept holds the maps added.
+std::vector<AlignedMap> WithSiteMaps(const LocalQuery& query, const LocalizedHit& best, std::vector<AlignedMap> place,
+                                     const SiteMaps& site, const LocalizeOptions& options,
+                                     std::vector<std::shared_ptr<const PreparedMap>>* kept);
+
 // The best hit refined, the verdict (with `second_pose`, when set and the
 // verdict would be sure: the best map's score at another pose, a rival),
 // the change masks when asked and sure or the place is clear (`prior_place`:
-// a prior answered for the place, LocalizeOptions::prior_changes_without_margin),
+// a prior answered for the place, LocalizeOptions::prior_changes_without_margin;
+// `site_maps`: where the best hit has a site pose, against those maps too),
 // and the hits cut to top_k.
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
-              Localization* out, bool prior_place = false);
+              Localization* out, bool prior_place = false, const SiteMaps& site_maps = {});
 
 // Sets each hit's collection_pose from its map's anchor, where it has one.
 void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits);

@@ -1276,6 +1276,61 @@ TEST(LocalizerTest, APlaceSplitOverTwoMapsGivesItsChangeMasksWhereTheyFitTogethe
   }
 }
 
+// A prior's change masks are also made against the anchored maps whose
+// robots drove nearest the query's path at its site pose, where their
+// anchors put them: each once, none that `excluded` leaves out, credited to
+// the best hit, at the pose the site gives (the demo maps' anchors are their
+// truth). Without a site pose, or with changes_site_maps 0, the place alone.
+TEST(LocalizerTest, ChangeMasksAlsoReadTheAnchoredMapsNearTheAnswersSitePose) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  const LocalMap& map = DemoMaps()[40];  // not stored
+  const LocalQuery query = PrepareLocalQuery(map, kOptions);
+  const Pose2 site = map.truth.global_frame;
+  auto in = [&](size_t id) { return Compose(Inverse(DemoMaps()[id].truth.global_frame), site); };
+  LocalizedHit best;
+  best.map_id = 39;
+  best.collection_pose = site;
+  const std::shared_ptr<const PreparedMap> db39 = collection.Prepared(39);
+  const std::vector<AlignedMap> place = {{db39.get(), in(39), 39}};
+  auto added = [&](const std::function<bool(uint64_t)>& excluded, const LocalizedHit& hit, const LocalizeOptions& o) {
+    std::vector<std::shared_ptr<const PreparedMap>> kept;
+    const std::vector<AlignedMap> with =
+        localize_internal::WithSiteMaps(query, hit, place, localize_internal::SiteMaps{&collection, &excluded}, o, &kept);
+    EXPECT_EQ(with.size(), place.size() + kept.size());
+    std::vector<size_t> ids;
+    for (size_t i = place.size(); i < with.size(); ++i) {
+      EXPECT_EQ(with[i].id, 39u);  // credited to the best hit
+      for (size_t id : EveryThirdMap()) {
+        if (collection.Prepared(id).get() != with[i].db) continue;
+        ids.push_back(id);
+        EXPECT_LT(std::hypot(with[i].pose.x - in(id).x, with[i].pose.y - in(id).y), 1e-9) << id;
+        EXPECT_NEAR(std::remainder(with[i].pose.theta - in(id).theta, 2 * M_PI), 0.0, 1e-9) << id;
+      }
+    }
+    EXPECT_EQ(ids.size(), kept.size());
+    return ids;
+  };
+  const std::vector<size_t> all = added([](uint64_t) { return false; }, best, kOptions);
+  ASSERT_FALSE(all.empty());
+  EXPECT_LE(all.size(), kOptions.changes_site_maps);
+  EXPECT_EQ(std::count(all.begin(), all.end(), 39u), 0) << "map 39 is in the place already";
+  for (size_t id : all) {
+    const Pose2& anchor = DemoMaps()[id].truth.global_frame;
+    EXPECT_LT(std::hypot(anchor.x - site.x, anchor.y - site.y), 10.0) << "map " << id << " is not near the query";
+  }
+  const size_t left_out = all.front();
+  const std::vector<size_t> without = added([&](uint64_t id) { return id == left_out; }, best, kOptions);
+  EXPECT_EQ(std::count(without.begin(), without.end(), left_out), 0);
+  EXPECT_FALSE(without.empty());
+  LocalizedHit unanchored = best;
+  unanchored.collection_pose.reset();
+  EXPECT_TRUE(added([](uint64_t) { return false; }, unanchored, kOptions).empty());
+  LocalizeOptions none = kOptions;
+  none.changes_site_maps = 0;
+  EXPECT_TRUE(added([](uint64_t) { return false; }, best, none).empty());
+}
+
 // A map of a point or two, or of points on one line, fits somewhere in
 // any stored map and constrains no pose: it is never answered sure.
 TEST(LocalizerTest, AMapOfAFewPointsOrOfOneLineIsNeverSure) {
