@@ -499,7 +499,8 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(query, best, options, options.confidence); };
   }
-  Conclude(query, options, std::move(hits), second_pose, with_changes, &out);
+  Conclude(query, options, std::move(hits), second_pose, with_changes, &out, /*prior_place=*/false,
+           SiteMaps{&source, &excluded});
   return out;
 }
 

@@ -202,18 +202,23 @@ struct LocalizeOptions {
   // protocol's share) instead: tracking .719, but 7.8 % false (frcampus
   // 15.0 %).
   bool changes_place_fit_before_conflicts = true;
-  // A prior's answer in an anchored collection (a site map) makes its change
-  // masks against its place's maps and also against this many anchored maps
-  // whose robots drove nearest the query's path at the answer's site pose,
-  // each where its anchor puts it (no scan match): what the site saw free
-  // or occupied there, not only what the maps matched to the query saw.
-  // More of the change's points lie where some stored map saw free space,
-  // and more of a spurious mask's points are explained by one. Chosen on
-  // aces, fr079, intel and orebro (lmd-eval change-misses, tracking priors:
-  // true change in the top mask 922 of their 1,245 tasks with none, 943 with
-  // 4 or 8; 4 reads fewer maps). Served, --mode tracking with changes, back
-  // to back (2026-12-06): top mask tuned on .690 -> .710, held out .722 ->
-  // .742; false masks tuned on 7.8 -> 7.5 %, held out 6.8 -> 5.9 %. 0: none.
+  // An answer in an anchored collection (a site map), whatever its query,
+  // makes its change masks against its place's maps and also against this
+  // many anchored maps whose robots drove nearest the query's path at the
+  // answer's site pose, each where its anchor puts it (no scan match): what
+  // the site saw free or occupied there, not only what the maps matched to
+  // the query saw. More of the change's points lie where some stored map
+  // saw free space, and more of a spurious mask's points are explained by
+  // one. Chosen on aces, fr079, intel and orebro (lmd-eval change-misses,
+  // tracking priors: true change in the top mask 922 of their 1,245 tasks
+  // with none, 943 with 4 or 8; 4 reads fewer maps). Served, with changes,
+  // back to back (2026-12-06): --mode tracking, top mask tuned on .690 ->
+  // .710, held out .722 -> .742, false masks tuned on 7.8 -> 7.5 %, held
+  // out 6.8 -> 5.9 %; --mode prior .674 -> .696 and .705 -> .728, false
+  // 8.3 -> 9.1 % and 7.6 -> 7.8 %; --mode sequence (80 per log) .332 ->
+  // .352 and .366 -> .398, false 14.1 -> 10.9 % and 3.4 -> 6.0 %. Global
+  // answers in a site map (lmd-eval change-misses --global, in process):
+  // 2,056 -> 2,129 of 4,698 tasks, false 5.7 -> 5.6 %. 0: none.
   size_t changes_site_maps = 4;
   // A query of fewer points is never sure nor gets masks: a point or two fit
   // somewhere in any stored map and pin no pose (a single point scored 1.0,

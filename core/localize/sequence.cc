@@ -134,7 +134,8 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   if (!anchored) {
     // Without a site map, the newest map's hits are judged alone.
     if (site.search.anchored_only) newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
-    Conclude(newest, options, std::move(newest_hits), nullptr, with_changes, &out);
+    Conclude(newest, options, std::move(newest_hits), nullptr, with_changes, &out, /*prior_place=*/false,
+             SiteMaps{&source, &excluded});
     out.verdict.sequence_maps = earlier.size();
     return out;
   }
@@ -187,7 +188,8 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   if (options.self_rival_radius_m > 0) {
     second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(newest, best, options, judged.confidence); };
   }
-  Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out);
+  Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out, /*prior_place=*/false,
+           SiteMaps{&source, &excluded});
   out.verdict.sequence_maps = earlier.size();
   if (!out.hits.empty()) out.verdict.sequence_agreeing = out.hits[0].sequence_agreeing;
   return out;

@@ -138,8 +138,9 @@ double PlaceFit(const LocalQuery& query, const std::vector<AlignedMap>& place, c
 bool PlaceClear(const LocalQuery& query, const std::vector<LocalizedHit>& hits, const Verdict& verdict,
                 const std::vector<AlignedMap>& place, const LocalizeOptions& options, bool prior_place);
 
-// The anchored maps a prior's answer also makes its change masks against
-// (LocalizeOptions::changes_site_maps), and the maps `excluded` leaves out.
+// The anchored maps an answer with a site pose also makes its change masks
+// against (LocalizeOptions::changes_site_maps), and the maps `excluded`
+// leaves out.
 struct SiteMaps {
   const MapSource* source = nullptr;
   const std::function<bool(uint64_t)>* excluded = nullptr;
@@ -162,7 +163,7 @@ std::vector<AlignedMap> WithSiteMaps(const LocalQuery& query, const LocalizedHit
 // and the hits cut to top_k.
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
-              Localization* out, bool prior_place = false, const SiteMaps& site_maps = {});
+              Localization* out, bool prior_place, const SiteMaps& site_maps);
 
 // Sets each hit's collection_pose from its map's anchor, where it has one.
 void SetCollectionPoses(const MapSource& source, std::vector<LocalizedHit>* hits);
