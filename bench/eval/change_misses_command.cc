@@ -26,6 +26,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <random>
 #include <string>
@@ -58,9 +60,14 @@ struct ChangeCounts {
   size_t classes[kClasses] = {};
 };
 
-// What most of the change's points were to the answer's place maps.
-ChangeClass WhyNotFound(const EvalQuery& q, const Localization& answer, const LocalizeOptions& options) {
-  const std::vector<AlignedMap> maps = localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options);
+// What most of the change's points were to the maps the answer's masks are
+// made against (its place's and, with a site pose, the site maps near it).
+ChangeClass WhyNotFound(const LocalQuery& query, const EvalQuery& q, const Localization& answer,
+                        const localize_internal::SiteMaps& site, const LocalizeOptions& options) {
+  std::vector<std::shared_ptr<const PreparedMap>> kept;
+  const std::vector<AlignedMap> maps = localize_internal::WithSiteMaps(
+      query, answer.hits[0], localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options), site,
+      options, &kept);
   const GeometricChangeOptions& change = options.changes;
   GeometricChangeOptions no_floor = change;
   no_floor.min_evidence = 0.0;
@@ -106,7 +113,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
     const bool task = !q.places.empty();
     counts.tasks += task;
     const std::unordered_set<size_t> candidates(q.candidates.begin(), q.candidates.end());
-    auto excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
+    const std::function<bool(uint64_t)> excluded = [&](uint64_t id) { return candidates.count(id) == 0; };
     const LocalQuery query = PrepareLocalQuery(q.changed, options);
     Localization answer;
     if (global) {
@@ -146,7 +153,7 @@ ChangeCounts CountChanges(const Dataset& d, const LocalizeOptions& options, bool
                      localize_internal::PlaceMaps(answer.hits, answer.verdict.best_score, options), options, !global)) {
         c = kNoMasks;
       } else {
-        c = WhyNotFound(q, answer, options);
+        c = WhyNotFound(query, q, answer, localize_internal::SiteMaps{&collection, &excluded}, options);
       }
     }
     ++counts.classes[*c];
