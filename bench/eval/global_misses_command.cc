@@ -97,7 +97,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
     LocalizeStats stats;
     localize_internal::SearchTrace trace;
     const std::vector<LocalizedHit> hits =
-        localize_internal::SearchAndVerify(query, collection, options, excluded, {}, &stats, &trace);
+        localize_internal::SearchAndVerify(query, collection, options, excluded, &stats, &trace);
     counts.matched += stats.maps_matched;
     if (!hits.empty() && d.ShowsPlace(q, hits[0].map_id)) continue;
     ++counts.missed;

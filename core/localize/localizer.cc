@@ -65,12 +65,11 @@ void SortHits(std::vector<LocalizedHit>* hits) {
 
 std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
                                            const std::vector<Candidate>& candidates, const LocalizeOptions& options,
-                                           const ScanMatchOptions& match, const std::function<bool()>& stop,
-                                           LocalizeStats* stats) {
+                                           const ScanMatchOptions& match, LocalizeStats* stats) {
   const auto t = Clock::now();
   std::vector<LocalizedHit> hits;
   for (const Candidate& c : candidates) {
-    if (stop && stop()) break;
+    if (StopAsked(options)) break;
     std::shared_ptr<const PreparedMap> db = source.Prepared(c.map_id);
     if (!db) continue;  // deleted meanwhile
     ScanMatch m;
@@ -182,8 +181,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // An answer whose searches were given up (their stop) is never sure, nor
   // its place clear: the rivals were not all looked for. Nor one of a few
   // points (min_sure_points).
-  const std::function<bool()>& stop = options.match.correlative.stop;
-  const bool cannot_be_sure = (stop && stop()) || query.match.points.size() < options.min_sure_points;
+  const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
@@ -378,16 +376,15 @@ std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passe
 std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
                                           const std::vector<PlaceHypothesis>& hypotheses,
                                           const LocalizeOptions& options, const ScanMatchOptions& match,
-                                          const std::function<bool()>& stop, LocalizeStats* stats,
-                                          std::vector<Candidate>* verified) {
+                                          LocalizeStats* stats, std::vector<Candidate>* verified) {
   std::vector<PassedOver> passed;
   std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed);
   const size_t matched_before = stats->maps_matched;
-  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stop, stats);
+  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stats);
   const bool stopped = stats->maps_matched - matched_before < candidates.size();  // (or maps deleted meanwhile)
   std::vector<Candidate> retried = stopped ? std::vector<Candidate>{} : PassedOverFailedFits(passed, hits, options);
   if (!retried.empty()) {
-    for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, match, stop, stats)) {
+    for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, match, stats)) {
       hits.push_back(std::move(hit));
     }
     SortHits(&hits);
@@ -407,8 +404,8 @@ namespace {
 // them.
 std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSource& source,
                                             const std::vector<PlaceHypothesis>& hypotheses,
-                                            const LocalizeOptions& options, const std::function<bool()>& stop,
-                                            LocalizeStats* stats, std::vector<Candidate>* verified) {
+                                            const LocalizeOptions& options, LocalizeStats* stats,
+                                            std::vector<Candidate>* verified) {
   const auto t = Clock::now();
   std::unordered_set<uint64_t> done;
   for (const Candidate& c : *verified) done.insert(c.map_id);
@@ -419,7 +416,7 @@ std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSo
   RankByFit(query, source, options, second.size(), options.second_round_block_m, &second);
   stats->search_ms += MsSince(t);
   std::vector<Candidate> chosen;
-  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, second, options, options.match, stop, stats, &chosen);
+  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, second, options, options.match, stats, &chosen);
   for (Candidate& c : chosen) verified->push_back(std::move(c));
   return hits;
 }
@@ -428,8 +425,7 @@ std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSo
 
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
-                                          const std::function<bool()>& stop, LocalizeStats* stats,
-                                          SearchTrace* trace) {
+                                          LocalizeStats* stats, SearchTrace* trace) {
   const auto t = Clock::now();
   // One search serves both rounds: its hypotheses come best first, so the
   // first max_hypotheses are those a search for only them returns.
@@ -444,12 +440,12 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   }
   stats->search_ms += MsSince(t);
   std::vector<Candidate> verified;
-  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, first, options, options.match, stop, stats, &verified);
+  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, first, options, options.match, stats, &verified);
   const bool fits = !hits.empty() && hits[0].score >= options.confidence.min_score;
-  const bool second_round = options.second_round_hypotheses > 0 && !fits && !(stop && stop());
+  const bool second_round = options.second_round_hypotheses > 0 && !fits && !StopAsked(options);
   if (second_round) {
     stats->hypotheses = all.size();
-    for (LocalizedHit& hit : VerifySecondRound(query, source, all, options, stop, stats, &verified)) {
+    for (LocalizedHit& hit : VerifySecondRound(query, source, all, options, stats, &verified)) {
       hits.push_back(std::move(hit));
     }
     SortHits(&hits);
@@ -465,6 +461,11 @@ LocalizeOptions WithStop(const LocalizeOptions& options, const std::function<boo
   LocalizeOptions stopping = options;
   stopping.match.correlative.stop = stop;
   return stopping;
+}
+
+bool StopAsked(const LocalizeOptions& options) {
+  const std::function<bool()>& stop = options.match.correlative.stop;
+  return stop && stop();
 }
 
 }  // namespace localize_internal
@@ -493,7 +494,7 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
                       bool with_changes) {
   const LocalizeOptions options = WithStop(given, stop);
   Localization out;
-  std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, stop, &out.stats);
+  std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, &out.stats);
   SetCollectionPoses(source, &hits);
   std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
   if (options.self_rival_radius_m > 0) {

@@ -168,8 +168,7 @@ std::vector<LocalizedHit> CompassFreePoses(const LocalQuery& query, const MapSou
 std::vector<LocalizedHit> VerifyAnyNear(const LocalQuery& query, const MapSource& source,
                                         const LocalizeOptions& options, const Prior& prior,
                                         const std::vector<MapSource::Anchored>& near,
-                                        const std::vector<LocalizedHit>& verified, const std::function<bool()>& stop,
-                                        LocalizeStats* stats) {
+                                        const std::vector<LocalizedHit>& verified, LocalizeStats* stats) {
   std::unordered_set<uint64_t> done;
   for (const LocalizedHit& h : verified) done.insert(h.map_id);
   std::vector<MapSource::Anchored> rest;
@@ -184,7 +183,7 @@ std::vector<LocalizedHit> VerifyAnyNear(const LocalQuery& query, const MapSource
   ScanMatchOptions match;
   const std::vector<Candidate> candidates =
       NearestCandidates(query, source, options, prior, rest, options.prior_maps, &match);
-  return VerifyCandidates(query, source, candidates, options, match, stop, stats);
+  return VerifyCandidates(query, source, candidates, options, match, stats);
 }
 
 }  // namespace
@@ -263,7 +262,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       NearestCandidates(query, source, options, prior,
                         source.NearestAnchored(path, prior.radius_m + reach, kBoundedPerMatched * maps, excluded),
                         maps, &near_match);
-  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, stop, &out.stats);
+  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, &out.stats);
   if (options.prior_second_pose && !tight) {
     for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) {
       hits.push_back(std::move(hit));
@@ -289,7 +288,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
   }
   if (options.prior_first_stage && !nearest_sure) {
-    for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, stop, &out.stats)) {
+    for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, &out.stats)) {
       hits.push_back(std::move(hit));
     }
   }
@@ -325,7 +324,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     out.stats.hypotheses = hypotheses.size();
     ScanMatchOptions stage_match = options.match;
     stage_match.window_m += kStageSlackM;  // the first stage's translation is good to its 1 m vote cell
-    for (LocalizedHit& hit : ChooseAndVerify(query, source, hypotheses, stage, stage_match, stop, &out.stats)) {
+    for (LocalizedHit& hit : ChooseAndVerify(query, source, hypotheses, stage, stage_match, &out.stats)) {
       hits.push_back(std::move(hit));
     }
   }
@@ -342,7 +341,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     std::vector<MapSource::Anchored> read_here;
     if (!loose) read_here = anchored_near();
     for (LocalizedHit& hit :
-         VerifyAnyNear(query, source, options, prior, loose ? near : read_here, hits, stop, &out.stats)) {
+         VerifyAnyNear(query, source, options, prior, loose ? near : read_here, hits, &out.stats)) {
       hits.push_back(std::move(hit));
     }
   }

@@ -85,7 +85,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   // where one map fits nowhere found no more places (lmd-eval served --mode
   // sequence, 2026-12-05: place@1 .922 -> .921) for +35 % CPU.
   site.second_round_hypotheses = 0;
-  std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, site, excluded, stop, &out.stats);
+  std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, site, excluded, &out.stats);
   SetCollectionPoses(source, &newest_hits);
   const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),
                                     [](const LocalizedHit& h) { return h.collection_pose.has_value(); });
@@ -108,7 +108,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   if (anchored) {
     for (size_t s = 0; s < earlier.size(); ++s) {
       if (stop && stop()) break;
-      std::vector<LocalizedHit> hits = SearchAndVerify(earlier[s].query, source, site, excluded, stop, &out.stats);
+      std::vector<LocalizedHit> hits = SearchAndVerify(earlier[s].query, source, site, excluded, &out.stats);
       SetCollectionPoses(source, &hits);
       for (const LocalizedHit& h : hits) {
         if (!h.collection_pose) continue;
@@ -133,7 +133,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   };
   if (!anchored) {
     // Without a site map, the newest map's hits are judged alone.
-    if (site.search.anchored_only) newest_hits = SearchAndVerify(newest, source, options, excluded, stop, &out.stats);
+    if (site.search.anchored_only) newest_hits = SearchAndVerify(newest, source, options, excluded, &out.stats);
     Conclude(newest, options, std::move(newest_hits), nullptr, with_changes, &out, /*prior_place=*/false,
              SiteMaps{&source, &excluded});
     out.verdict.sequence_maps = earlier.size();

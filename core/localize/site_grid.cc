@@ -46,10 +46,10 @@ std::vector<double> CompassTurns(const LocalQuery& query, const std::vector<Near
 // SiteGridHits, less its timing.
 std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options,
                                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
-                                          const std::function<bool()>& stop, LocalizeStats* stats) {
+                                          LocalizeStats* stats) {
   std::vector<LocalizedHit> hits;
   const std::vector<Point2>& points = query.match.search_points;
-  if (options.prior_site_maps == 0 || points.empty() || (stop && stop())) return hits;
+  if (options.prior_site_maps == 0 || points.empty() || StopAsked(options)) return hits;
   // The anchored maps the query can overlap: its points lie within `reach`
   // of its origin, which the prior puts within the window of its own.
   const double reach = QueryReach(query);
@@ -118,7 +118,7 @@ std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSour
   around.window_m = kPickWindowM;
   around.window_deg = kPickWindowDeg;
   around.quarter_turns = false;
-  for (size_t i = 0; i < keep && !(stop && stop()); ++i) {
+  for (size_t i = 0; i < keep && !StopAsked(options); ++i) {
     const Picked& p = picked[i];
     LocalizedHit hit = Scored(query, *p.db, MatchLocalMaps(query.match, *p.db, {p.in_map}, around), options);
     ++stats->maps_matched;
@@ -133,10 +133,9 @@ std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSour
 
 std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource& source,
                                        const LocalizeOptions& options, const Prior& prior,
-                                       const std::function<bool(uint64_t)>& excluded,
-                                       const std::function<bool()>& stop, LocalizeStats* stats) {
+                                       const std::function<bool(uint64_t)>& excluded, LocalizeStats* stats) {
   const auto t = std::chrono::steady_clock::now();
-  std::vector<LocalizedHit> hits = MatchOnSiteGrid(query, source, options, prior, excluded, stop, stats);
+  std::vector<LocalizedHit> hits = MatchOnSiteGrid(query, source, options, prior, excluded, stats);
   stats->verify_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   return hits;
 }

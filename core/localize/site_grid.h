@@ -21,10 +21,10 @@ namespace lmd::localize_internal {
 // that fits the fused site grid best, each scan matched just around it.
 // The site is searched at the turns the maps' compasses give within the
 // prior's heading range (each +-options.match.window_deg), or over the
-// whole range when none lies in it. Nothing once `stop` (optional) says so.
+// whole range when none lies in it. Nothing once options' stop says so
+// (StopAsked, verification.h).
 std::vector<LocalizedHit> SiteGridHits(const LocalQuery& query, const MapSource& source,
                                        const LocalizeOptions& options, const Prior& prior,
-                                       const std::function<bool(uint64_t)>& excluded,
-                                       const std::function<bool()>& stop, LocalizeStats* stats);
+                                       const std::function<bool(uint64_t)>& excluded, LocalizeStats* stats);
 
 }  // namespace lmd::localize_internal

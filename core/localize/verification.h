@@ -27,6 +27,8 @@ double QueryReach(const LocalQuery& query);
 // `options` whose scan matches give up once `stop` returns true (a caller's
 // deadline or cancellation), not only between them.
 LocalizeOptions WithStop(const LocalizeOptions& options, const std::function<bool()>& stop);
+// Whether the stop WithStop gave `options` asks to give up (none: never).
+bool StopAsked(const LocalizeOptions& options);
 
 // The hit of a scan match: its pose, shares and verification score.
 LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMatch& m, const LocalizeOptions& options);
@@ -86,20 +88,18 @@ void SortHits(std::vector<LocalizedHit>* hits);
 
 // Scan matches each candidate near its guesses with `match` (options.match,
 // or a wider window), best hits first (score, then the closer fit, then the
-// map id). Stops once `stop` says so; counts into stats.
+// map id). Stops once options' stop says so (StopAsked); counts into stats.
 std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
                                            const std::vector<Candidate>& candidates, const LocalizeOptions& options,
-                                           const ScanMatchOptions& match, const std::function<bool()>& stop,
-                                           LocalizeStats* stats);
+                                           const ScanMatchOptions& match, LocalizeStats* stats);
 
 // ChooseCandidates, then the chosen verified with `match`, then
-// PassedOverFailedFits verified too (none once `stop` cut the first round
+// PassedOverFailedFits verified too (none once the stop cut the first round
 // short), best hits first. `verified` (optional) receives the candidates.
 std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
                                           const std::vector<PlaceHypothesis>& hypotheses,
                                           const LocalizeOptions& options, const ScanMatchOptions& match,
-                                          const std::function<bool()>& stop, LocalizeStats* stats,
-                                          std::vector<Candidate>* verified = nullptr);
+                                          LocalizeStats* stats, std::vector<Candidate>* verified = nullptr);
 
 // What SearchAndVerify chose (lmd-eval global-misses reads it).
 struct SearchTrace {
@@ -113,8 +113,7 @@ struct SearchTrace {
 // Localize without its verdict. `trace` (optional) receives its choices.
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
                                           const LocalizeOptions& options, const std::function<bool(uint64_t)>& excluded,
-                                          const std::function<bool()>& stop, LocalizeStats* stats,
-                                          SearchTrace* trace = nullptr);
+                                          LocalizeStats* stats, SearchTrace* trace = nullptr);
 
 // The maps of the answer's place: the hits agreeing with the best (within
 // the agreement window), each with the query's pose in it. Change masks are

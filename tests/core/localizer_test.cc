@@ -426,7 +426,7 @@ TEST(LocalizerTest, APriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
     const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
     LocalizeStats stats;
     const std::vector<LocalizedHit> hits =
-        localize_internal::SiteGridHits(query, collection, kOptions, prior, excluded, {}, &stats);
+        localize_internal::SiteGridHits(query, collection, kOptions, prior, excluded, &stats);
     ASSERT_LE(hits.size(), kOptions.prior_site_maps) << q;
     ++queries;
     if (hits.empty()) continue;
@@ -440,7 +440,7 @@ TEST(LocalizerTest, APriorsSiteGridPutsTheQueryWhereTheSitesMapsShowIt) {
     right += ShowsPlace(map, DemoMaps()[best.map_id]) && TranslationError(site, truth) < 0.1 &&
              AngleErrorDeg(site, truth) < 0.5;
     tights += tight;
-    EXPECT_TRUE(localize_internal::SiteGridHits(query, collection, off, prior, excluded, {}, &stats).empty());
+    EXPECT_TRUE(localize_internal::SiteGridHits(query, collection, off, prior, excluded, &stats).empty());
   }
   EXPECT_GE(right * 10, queries * 9) << right << " of " << queries;
   EXPECT_GT(tights, 0u);
