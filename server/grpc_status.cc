@@ -1,5 +1,7 @@
 #include "server/grpc_status.h"
 
+#include <string>
+
 namespace lmd::server {
 
 grpc::Status ToGrpcStatus(const Status& status) {
@@ -36,7 +38,9 @@ Status FromGrpcStatus(const grpc::Status& status) {
     case grpc::StatusCode::DEADLINE_EXCEEDED: return Status::DeadlineExceeded(m);
     case grpc::StatusCode::FAILED_PRECONDITION: return Status::FailedPrecondition(m);
     case grpc::StatusCode::UNAVAILABLE: return Status::Unavailable(m);
-    default: return Status::Internal(m);
+    default:  // codes lmdd never answers itself (UNIMPLEMENTED: a peer without the method)
+      return Status::Internal("the node called answered gRPC code " + std::to_string(status.error_code()) +
+                              (m.empty() ? " with no message" : ": " + m));
   }
 }
 

@@ -15,7 +15,10 @@ namespace lmd::server {
 grpc::Status ToGrpcStatus(const Status& status);
 
 // The reverse, for a call lmdd forwarded to another node: its answer goes
-// back to the client as it came (codes without an lmd equivalent: Internal).
+// back to the client as it came. Codes without an lmd equivalent become
+// Internal naming the code, so that a peer's UNIMPLEMENTED with no message
+// (a node without the method) reaches the client as what it is, not as an
+// empty error.
 Status FromGrpcStatus(const grpc::Status& status);
 
 }  // namespace lmd::server
