@@ -107,7 +107,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   }
   if (anchored) {
     for (size_t s = 0; s < earlier.size(); ++s) {
-      if (stop && stop()) break;
+      if (StopAsked(options)) break;
       std::vector<LocalizedHit> hits = SearchAndVerify(earlier[s].query, source, site, excluded, &out.stats);
       SetCollectionPoses(source, &hits);
       for (const LocalizedHit& h : hits) {
@@ -144,7 +144,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   if (hypotheses.size() > options.sequence_hypotheses) hypotheses.resize(options.sequence_hypotheses);
 
   for (Hypothesis& h : hypotheses) {
-    if (stop && stop()) break;
+    if (StopAsked(options)) break;
     const SequenceCheck check = CheckSequenceAt(newest, earlier, source, options, h.newest, excluded, stop);
     out.stats.maps_matched += check.maps_matched;
     // Each map's better fit: where the check found it, or already shown.
