@@ -109,6 +109,8 @@ std::vector<MethodSpec> DefaultMethods(bool ablations) {
   ablation("abl_verify_40", "40 maps verified (100 hypotheses) instead of 20", [](LocalizeOptions& o) {
     o.verify_maps = 40, o.search.max_hypotheses = 100;
   });
+  ablation("abl_rank_by_share", "hits ranked by their score (share within 0.3 m), no closeness blended in",
+           [](LocalizeOptions& o) { o.closeness_weight = 0; });
   ablation("abl_no_route_diversity", "route neighbours of chosen maps verified too",
            [](LocalizeOptions& o) { o.maps_per_route_window = 0; });
   ablation("abl_route_2", "two maps per route window verified",

@@ -68,17 +68,21 @@ Overlap MeasureOverlap(const std::vector<Point2>& query_points, const PreparedMa
   if (query_points.empty() || db.empty()) return o;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   double sum2 = 0.0;
+  size_t credit = 0;  // thirds
+  const double third2 = radius_m * radius_m / 9;
   for (const Point2& p : query_points) {
     const Point2 q{pose.x + c * p.x - s * p.y, pose.y + s * p.x + c * p.y};
     double d2 = 0;
     if (NearestPoint(db, q, radius_m, &d2) >= 0) {
       ++o.inliers;
       sum2 += d2;
+      credit += d2 <= third2 ? 3 : d2 <= 4 * third2 ? 2 : 1;
     } else if (InFreeSpace(db, q)) {
       ++o.conflicts;
     }
   }
   o.fraction = static_cast<double>(o.inliers) / query_points.size();
+  o.closeness = static_cast<double>(credit) / (3.0 * query_points.size());
   o.conflict_fraction = static_cast<double>(o.conflicts) / query_points.size();
   o.rms_m = o.inliers ? std::sqrt(sum2 / o.inliers) : 0.0;
   return o;

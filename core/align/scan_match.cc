@@ -39,6 +39,7 @@ ScanMatch Match(const PreparedQuery& query, const PreparedMap& db, const std::ve
   }
   m.score = o.fraction;
   m.inlier_rms_m = o.rms_m;
+  m.closeness = o.closeness;
   m.inliers = o.inliers;
   m.conflict_fraction = o.conflict_fraction;
   return m;

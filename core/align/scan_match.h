@@ -83,6 +83,7 @@ struct ScanMatch {
   Pose2 pose;                 // query own frame in db own frame
   double score = 0.0;         // fraction of query points within inlier_radius_m after alignment, [0, 1]
   double inlier_rms_m = 0.0;  // RMS distance of those inliers
+  double closeness = 0.0;     // Overlap::closeness (icp.h) at the pose
   size_t inliers = 0;
   double conflict_fraction = 0.0;  // query points in db free space (not inliers) / query points
   double search_score = 0.0;  // mean likelihood at the correlative optimum, [0, 1]

@@ -34,8 +34,10 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
   hit.conflict = m.conflict_fraction;
   hit.reverse_conflict =
       MeasureOverlap(db.sparse_points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
-  hit.score = hit.overlap - options.conflict_weight * hit.conflict -
-              options.reverse_conflict_weight * hit.reverse_conflict;
+  const double conflicts =
+      options.conflict_weight * hit.conflict + options.reverse_conflict_weight * hit.reverse_conflict;
+  hit.score = hit.overlap - conflicts;
+  hit.rank_fit = (1 - options.closeness_weight) * m.score + options.closeness_weight * m.closeness - conflicts;
   return hit;
 }
 
@@ -43,7 +45,7 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
   ScanMatch m;
   m.pose = pose;
   const Overlap o = MeasureOverlap(query.match.points, db, pose, options.match.inlier_radius_m);
-  m.score = o.fraction, m.inlier_rms_m = o.rms_m, m.conflict_fraction = o.conflict_fraction;
+  m.score = o.fraction, m.inlier_rms_m = o.rms_m, m.closeness = o.closeness, m.conflict_fraction = o.conflict_fraction;
   return Scored(query, db, m, options);
 }
 
@@ -54,9 +56,10 @@ std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits) {
 }
 
 void SortHits(std::vector<LocalizedHit>* hits) {
-  // Equal scores (a map that explains every query point, and its route
+  // Equal fits (a map that explains every query point, and its route
   // neighbour that does too): the one that explains them more closely first.
   std::stable_sort(hits->begin(), hits->end(), [](const LocalizedHit& a, const LocalizedHit& b) {
+    if (a.rank_fit != b.rank_fit) return a.rank_fit > b.rank_fit;
     if (a.score != b.score) return a.score > b.score;
     if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
     return a.map_id < b.map_id;

@@ -83,12 +83,12 @@ std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passe
 // `hits` as the verdict sees them (confidence.h), in the same order.
 std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits);
 
-// Best first: score, then the closer fit, then the map id.
+// Best first: rank_fit, then score, then the closer fit, then the map id.
 void SortHits(std::vector<LocalizedHit>* hits);
 
 // Scan matches each candidate near its guesses with `match` (options.match,
-// or a wider window), best hits first (score, then the closer fit, then the
-// map id). Stops once options' stop says so (StopAsked); counts into stats.
+// or a wider window), best hits first (SortHits). Stops once options' stop
+// says so (StopAsked); counts into stats.
 std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSource& source,
                                            const std::vector<Candidate>& candidates, const LocalizeOptions& options,
                                            const ScanMatchOptions& match, LocalizeStats* stats);

@@ -674,11 +674,48 @@ TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {
     const LocalizedHit& h = l.hits[r];
     EXPECT_TRUE(ids.insert(h.map_id).second) << "map " << h.map_id << " twice";
     EXPECT_NEAR(h.score, h.overlap - h.conflict - h.reverse_conflict, 1e-12);
+    EXPECT_LE(h.rank_fit, h.score + 1e-12);  // a point's closeness credit is at most its share's
     EXPECT_EQ(h.db, collection.Prepared(h.map_id));
     EXPECT_GT(h.votes, 0.0);
     if (r > 0) {
-      EXPECT_GE(l.hits[r - 1].score, h.score);
+      EXPECT_GE(l.hits[r - 1].rank_fit, h.rank_fit);
     }
+  }
+}
+
+// The walls of a w x h room centred on the origin, a point every 5 cm,
+// leaving out those within gap_m / 2 of the middle of the north wall.
+LocalMap RoomWalls(double w, double h, double gap_m = 0.0) {
+  LocalMap room;
+  for (double t = -w / 2; t <= w / 2 + 1e-9; t += 0.05) {
+    room.points.push_back({t, -h / 2});
+    if (std::abs(t) > gap_m / 2) room.points.push_back({t, h / 2});
+  }
+  for (double t = -h / 2 + 0.05; t < h / 2 - 1e-9; t += 0.05) {
+    room.points.push_back({-w / 2, t});
+    room.points.push_back({w / 2, t});
+  }
+  return room;
+}
+
+// The place, with part of a wall unseen, explains fewer query points than a
+// look-alike room 0.44 m wider and longer, which brings every point within
+// 0.3 m but none within 0.2 m: hits are ranked by how closely their maps
+// explain the query too, not by the share alone.
+TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExplainsMoreLoosely) {
+  const LocalMap query = RoomWalls(6.0, 4.0);
+  const LocalMap place = RoomWalls(6.0, 4.0, 3.0), look_alike = RoomWalls(6.44, 4.44);
+  const PreparedPlace place_prepared = PreparePlace(place, kOptions), look_prepared = PreparePlace(look_alike, kOptions);
+  for (const double weight : {kOptions.closeness_weight, 0.0}) {
+    LocalizeOptions options = kOptions;
+    options.closeness_weight = weight;
+    const LocalQuery q = PrepareLocalQuery(query, options);
+    std::vector<LocalizedHit> hits = {localize_internal::ScoredAt(q, *look_prepared.map, {0, 0, 0}, options),
+                                      localize_internal::ScoredAt(q, *place_prepared.map, {0, 0, 0}, options)};
+    hits[0].map_id = 2, hits[1].map_id = 1;
+    EXPECT_GT(hits[0].score, hits[1].score + 0.05);  // the look-alike explains more within 0.3 m
+    localize_internal::SortHits(&hits);
+    EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
 }
 

@@ -177,6 +177,25 @@ TEST(ScanMatchTest, DegenerateInputsScoreZeroWithoutCrashing) {
   EXPECT_EQ(SecondBestMatch(PrepareQuery(one), PrepareMap(rich), guess, 1.0, 10.0).score, 0.0);
 }
 
+// A query point's credit falls by thirds of the radius: 1 within 0.1 m of
+// a map point, 2/3 within 0.2 m, 1/3 within 0.3 m, none beyond; the share
+// counts each point within the radius alike.
+TEST(ScanMatchTest, ClosenessCreditsEachPointByHowNearItsMapPointIs) {
+  LocalMap wall;
+  for (int i = 0; i <= 200; ++i) wall.points.push_back({0.05 * i, 0.0});
+  const PreparedMap db = PrepareMap(wall);
+  const std::vector<Point2> query = {{1.0, 0.05}, {3.0, 0.15}, {5.0, 0.25}, {7.0, 0.35}};
+  const Overlap o = MeasureOverlap(query, db, {0, 0, 0}, 0.3);
+  EXPECT_EQ(o.inliers, 3u);
+  EXPECT_DOUBLE_EQ(o.fraction, 0.75);
+  EXPECT_NEAR(o.closeness, (1.0 + 2.0 / 3 + 1.0 / 3) / 4, 1e-12);
+  // Moved 6 cm toward the wall: 1 cm, 9 cm, 19 cm and 29 cm from it.
+  const Overlap on = MeasureOverlap(query, db, {0, -0.06, 0}, 0.3);
+  EXPECT_NEAR(on.closeness, (1.0 + 1.0 + 2.0 / 3 + 1.0 / 3) / 4, 1e-12);
+  EXPECT_DOUBLE_EQ(on.fraction, 1.0);
+  EXPECT_EQ(MeasureOverlap({}, db, {0, 0, 0}, 0.3).closeness, 0.0);
+}
+
 // A map made of two identical rooms 10 m apart: the query (one room) fits
 // at two poses; the second-best search, away from the first, finds the
 // other room, and never returns a pose inside the excluded zone.
