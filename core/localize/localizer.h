@@ -141,8 +141,13 @@ struct LocalizeOptions {
   // ranking by the score (0): 1 (closeness alone) lost aces 3 global
   // queries' places (place@1 .753 -> .740); 0.5 lost none on any log. Served
   // (2026-12-06, docs/results.md): global place@1 held out .864 -> .870
-  // (mit .631 -> .656), sure and wrong 17 -> 15; tracking and prior priors
-  // the same place@1, sure and wrong 46 -> 43 and 41 -> 42.
+  // (mit .631 -> .656), sure and wrong 17 -> 15. Not within a prior
+  // (LocalizeNear ranks by the score): there the maps show one place, and
+  // closeness picked maps that explain part of the query closely at a pose a
+  // few decimetres off (lmd-bench load --mode fleet, 200 robots: sure and
+  // wrong 1 -> 6, all under 1 m off, right fixes .999 -> .996; served
+  // tracking and prior priors: the same place@1, sure and wrong 46 -> 43
+  // and 41 -> 42).
   double closeness_weight = 0.5;
   ConfidenceOptions confidence;
   // The evidence floor (geometric_changes.h): 1.5 where the place's maps

@@ -227,7 +227,12 @@ Status ValidatePrior(const Prior& prior) {
 Localization LocalizeNear(const LocalQuery& query, const MapSource& source, const LocalizeOptions& given,
                           const Prior& prior, const std::function<bool(uint64_t)>& excluded,
                           const std::function<bool()>& stop, bool with_changes) {
-  const LocalizeOptions options = WithStop(given, stop);
+  LocalizeOptions options = WithStop(given, stop);
+  // Hits ranked by their score, without closeness (LocalizeOptions::
+  // closeness_weight): the prior has ruled out the look-alikes beyond its
+  // window, the maps near it show one place, and of those the one that
+  // explains the most of the query gives its pose.
+  options.closeness_weight = 0;
   Localization out;
   // Where the query's points can lie in the collection's frame.
   const double reach = QueryReach(query);
