@@ -34,10 +34,11 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
   hit.conflict = m.conflict_fraction;
   hit.reverse_conflict =
       MeasureOverlap(db.sparse_points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
-  const double conflicts =
-      options.conflict_weight * hit.conflict + options.reverse_conflict_weight * hit.reverse_conflict;
-  hit.score = hit.overlap - conflicts;
-  hit.rank_fit = (1 - options.closeness_weight) * m.score + options.closeness_weight * m.closeness - conflicts;
+  auto less_conflicts = [&](double fit) {
+    return fit - options.conflict_weight * hit.conflict - options.reverse_conflict_weight * hit.reverse_conflict;
+  };
+  hit.score = less_conflicts(hit.overlap);
+  hit.rank_fit = less_conflicts((1 - options.closeness_weight) * m.score + options.closeness_weight * m.closeness);
   return hit;
 }
 
