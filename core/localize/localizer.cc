@@ -30,16 +30,20 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
   LocalizedHit hit;
   hit.pose = m.pose;
   hit.overlap = m.score;
+  hit.closeness = m.closeness;
   hit.inlier_rms_m = m.inlier_rms_m;
   hit.conflict = m.conflict_fraction;
   hit.reverse_conflict =
       MeasureOverlap(db.sparse_points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
-  auto less_conflicts = [&](double fit) {
-    return fit - options.conflict_weight * hit.conflict - options.reverse_conflict_weight * hit.reverse_conflict;
-  };
-  hit.score = less_conflicts(hit.overlap);
-  hit.rank_fit = less_conflicts((1 - options.closeness_weight) * m.score + options.closeness_weight * m.closeness);
+  hit.score = hit.overlap - options.conflict_weight * hit.conflict -
+              options.reverse_conflict_weight * hit.reverse_conflict;
+  hit.rank_fit = RankFit(hit, options.closeness_weight, options);
   return hit;
+}
+
+double RankFit(const LocalizedHit& hit, double closeness_weight, const LocalizeOptions& options) {
+  return (1 - closeness_weight) * hit.overlap + closeness_weight * hit.closeness -
+         options.conflict_weight * hit.conflict - options.reverse_conflict_weight * hit.reverse_conflict;
 }
 
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options) {

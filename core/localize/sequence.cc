@@ -19,6 +19,9 @@ struct Hypothesis {
   double single = 0.0;      // the verification score of the map that proposed it
   LocalizedHit hit;         // the newest map's best hit at it (once scored)
   double score = 0.0;       // the sequence's mean
+  // ... of its maps' fits as hits are ranked (RankFit): hypotheses are
+  // ranked by it, as hits are, and scored by the mean of the scores.
+  double rank = 0.0;
   size_t agreeing = 0;      // earlier maps that fit
 };
 
@@ -148,7 +151,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
     const SequenceCheck check = CheckSequenceAt(newest, earlier, source, options, h.newest, excluded, stop);
     out.stats.maps_matched += check.maps_matched;
     // Each map's better fit: where the check found it, or already shown.
-    double total = 0.0;
+    double total = 0.0, total_rank = 0.0;
     for (size_t k = 0; k < check.best.size(); ++k) {
       const LocalizedHit* shown_here = best_shown(k, check.windows[k]);
       const LocalizedHit& found = check.best[k];
@@ -156,16 +159,18 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
       if (k == 0) h.hit = *better;
       const double score = better->db ? better->score : 0.0;
       total += score;
+      total_rank += better->db ? RankFit(*better, options.closeness_weight, options) : 0.0;
       if (k > 0) h.agreeing += score >= options.confidence.min_score;
     }
     if (!h.hit.db) continue;
     h.score = total / static_cast<double>(earlier.size() + 1);
+    h.rank = total_rank / static_cast<double>(earlier.size() + 1);
   }
   // The hits: the newest map's best hit at each hypothesis, by the
   // sequence's score; the verdict over them (two hypotheses at one place
   // agree, at two places one is the other's rival).
   std::stable_sort(hypotheses.begin(), hypotheses.end(),
-                   [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.rank > b.rank; });
   std::vector<LocalizedHit> hits;
   for (const Hypothesis& h : hypotheses) {
     if (!h.hit.db) continue;

@@ -39,10 +39,11 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
 // odometry; for the `sequence_hypotheses` best, each map of the sequence is
 // localised where the pose puts it (CheckSequenceAt) and the hypothesis
 // scores the sequence's mean. A look-alike that fools the newest map rarely
-// fools the maps before it. The
-// hits are the newest map's at each hypothesis, ranked and judged by that
-// score; sequence_agreeing counts the earlier maps that fit (score >=
-// confidence.min_score). Without anchored maps the newest map is judged
+// fools the maps before it. The hits are the newest map's at each
+// hypothesis, ranked by the mean of the maps' fits as single hits are ranked
+// (RankFit: closeness_weight of each share replaced by its closeness) and
+// judged by the mean of their scores; sequence_agreeing counts the earlier
+// maps that fit (score >= confidence.min_score). Without anchored maps the newest map is judged
 // alone (verdict.sequence_agreeing 0).
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,

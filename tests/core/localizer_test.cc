@@ -714,6 +714,11 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
                                       localize_internal::ScoredAt(q, *place_prepared.map, {0, 0, 0}, options)};
     hits[0].map_id = 2, hits[1].map_id = 1;
     EXPECT_GT(hits[0].score, hits[1].score + 0.05);  // the look-alike explains more within 0.3 m
+    for (const LocalizedHit& h : hits) {
+      // Without closeness a hit is ranked by its score, to the last bit (a prior's answers rely on it).
+      EXPECT_EQ(localize_internal::RankFit(h, 0.0, options), h.score);
+      EXPECT_EQ(localize_internal::RankFit(h, weight, options), h.rank_fit);
+    }
     localize_internal::SortHits(&hits);
     EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
