@@ -167,7 +167,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
     h.rank = total_rank / static_cast<double>(earlier.size() + 1);
   }
   // The hits: the newest map's best hit at each hypothesis, by the
-  // sequence's score; the verdict over them (two hypotheses at one place
+  // sequence's rank; the verdict over them (two hypotheses at one place
   // agree, at two places one is the other's rival).
   std::stable_sort(hypotheses.begin(), hypotheses.end(),
                    [](const Hypothesis& a, const Hypothesis& b) { return a.rank > b.rank; });

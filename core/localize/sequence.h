@@ -43,8 +43,8 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
 // hypothesis, ranked by the mean of the maps' fits as single hits are ranked
 // (RankFit: closeness_weight of each share replaced by its closeness) and
 // judged by the mean of their scores; sequence_agreeing counts the earlier
-// maps that fit (score >= confidence.min_score). Without anchored maps the newest map is judged
-// alone (verdict.sequence_agreeing 0).
+// maps that fit (score >= confidence.min_score). Without anchored maps the
+// newest map is judged alone (verdict.sequence_agreeing 0).
 Localization LocalizeSequence(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
                               const MapSource& source, const LocalizeOptions& options,
                               const std::function<bool(uint64_t)>& excluded = {},
