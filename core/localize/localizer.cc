@@ -37,12 +37,12 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
       MeasureOverlap(db.sparse_points, *query.map, Inverse(m.pose), options.match.inlier_radius_m).conflict_fraction;
   hit.score = hit.overlap - options.conflict_weight * hit.conflict -
               options.reverse_conflict_weight * hit.reverse_conflict;
-  hit.rank_fit = RankFit(hit, options.closeness_weight, options);
   return hit;
 }
 
-double RankFit(const LocalizedHit& hit, double closeness_weight, const LocalizeOptions& options) {
-  return (1 - closeness_weight) * hit.overlap + closeness_weight * hit.closeness -
+double RankFit(const LocalizedHit& hit, const LocalizeOptions& options) {
+  const double w = options.closeness_weight;
+  return (1 - w) * hit.overlap + w * hit.closeness -
          options.conflict_weight * hit.conflict - options.reverse_conflict_weight * hit.reverse_conflict;
 }
 
@@ -60,11 +60,12 @@ std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits) {
   return judged;
 }
 
-void SortHits(std::vector<LocalizedHit>* hits) {
+void SortHits(std::vector<LocalizedHit>* hits, const LocalizeOptions& options) {
   // Equal fits (a map that explains every query point, and its route
   // neighbour that does too): the one that explains them more closely first.
-  std::stable_sort(hits->begin(), hits->end(), [](const LocalizedHit& a, const LocalizedHit& b) {
-    if (a.rank_fit != b.rank_fit) return a.rank_fit > b.rank_fit;
+  std::stable_sort(hits->begin(), hits->end(), [&](const LocalizedHit& a, const LocalizedHit& b) {
+    const double fit_a = RankFit(a, options), fit_b = RankFit(b, options);
+    if (fit_a != fit_b) return fit_a > fit_b;
     if (a.score != b.score) return a.score > b.score;
     if (a.inlier_rms_m != b.inlier_rms_m) return a.inlier_rms_m < b.inlier_rms_m;
     return a.map_id < b.map_id;
@@ -96,7 +97,7 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
     hit.db = std::move(db);
     hits.push_back(std::move(hit));
   }
-  SortHits(&hits);
+  SortHits(&hits, options);
   stats->verify_ms += MsSince(t);
   return hits;
 }
@@ -395,7 +396,7 @@ std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSour
     for (LocalizedHit& hit : VerifyCandidates(query, source, retried, options, match, stats)) {
       hits.push_back(std::move(hit));
     }
-    SortHits(&hits);
+    SortHits(&hits, options);
   }
   if (verified) {
     *verified = std::move(candidates);
@@ -456,7 +457,7 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
     for (LocalizedHit& hit : VerifySecondRound(query, source, all, options, stats, &verified)) {
       hits.push_back(std::move(hit));
     }
-    SortHits(&hits);
+    SortHits(&hits, options);
   }
   if (trace) {
     trace->hypotheses = second_round ? std::move(all) : std::move(first);

@@ -418,9 +418,6 @@ struct LocalizedHit {
   double reverse_conflict = 0.0; // share of db points in the query's free space
   double inlier_rms_m = 0.0;     // RMS distance of the explained query points (ties: smaller first)
   double closeness = 0.0;        // Overlap::closeness (icp.h): how near the explained query points lie
-  // What hits are ranked by: the score with the overlap's closeness blended
-  // into its share (LocalizeOptions::closeness_weight).
-  double rank_fit = 0.0;
   double votes = 0.0;            // first-stage votes of its best hypothesis
   size_t first_stage_rank = 0;   // rank of its best hypothesis (0 = first)
   bool agrees_with_best = false; // a place hit: consistent with the best hit (confidence.h)

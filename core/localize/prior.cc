@@ -275,7 +275,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   }
   auto keep_each_once = [&](std::vector<LocalizedHit>* kept) {
     // Each map once, at its better fit; none that the match moved outside the prior.
-    SortHits(kept);
+    SortHits(kept, options);
     std::unordered_set<uint64_t> seen;
     kept->erase(std::remove_if(kept->begin(), kept->end(),
                                [&](const LocalizedHit& h) { return !inside(h.map_id, h.pose) || !seen.insert(h.map_id).second; }),

@@ -159,7 +159,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
       if (k == 0) h.hit = *better;
       const double score = better->db ? better->score : 0.0;
       total += score;
-      total_rank += better->db ? RankFit(*better, options.closeness_weight, options) : 0.0;
+      total_rank += better->db ? RankFit(*better, options) : 0.0;
       if (k > 0) h.agreeing += score >= options.confidence.min_score;
     }
     if (!h.hit.db) continue;

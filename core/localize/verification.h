@@ -83,12 +83,12 @@ std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passe
 // `hits` as the verdict sees them (confidence.h), in the same order.
 std::vector<JudgedHit> AsJudged(const std::vector<LocalizedHit>& hits);
 
-// The fit `hit` is ranked by (LocalizedHit::rank_fit): its score with
-// `closeness_weight` of the share replaced by the closeness.
-double RankFit(const LocalizedHit& hit, double closeness_weight, const LocalizeOptions& options);
+// The fit hits are ranked by: the score with options.closeness_weight of
+// the share replaced by the closeness.
+double RankFit(const LocalizedHit& hit, const LocalizeOptions& options);
 
-// Best first: rank_fit, then score, then the closer fit, then the map id.
-void SortHits(std::vector<LocalizedHit>* hits);
+// Best first: RankFit, then score, then the closer fit, then the map id.
+void SortHits(std::vector<LocalizedHit>* hits, const LocalizeOptions& options);
 
 // Scan matches each candidate near its guesses with `match` (options.match,
 // or a wider window), best hits first (SortHits). Stops once options' stop

@@ -674,11 +674,11 @@ TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {
     const LocalizedHit& h = l.hits[r];
     EXPECT_TRUE(ids.insert(h.map_id).second) << "map " << h.map_id << " twice";
     EXPECT_NEAR(h.score, h.overlap - h.conflict - h.reverse_conflict, 1e-12);
-    EXPECT_LE(h.rank_fit, h.score + 1e-12);  // a point's closeness credit is at most its share's
+    EXPECT_LE(localize_internal::RankFit(h, options), h.score + 1e-12);  // closeness credit <= share credit
     EXPECT_EQ(h.db, collection.Prepared(h.map_id));
     EXPECT_GT(h.votes, 0.0);
     if (r > 0) {
-      EXPECT_GE(l.hits[r - 1].rank_fit, h.rank_fit);
+      EXPECT_GE(localize_internal::RankFit(l.hits[r - 1], options), localize_internal::RankFit(h, options));
     }
   }
 }
@@ -714,12 +714,11 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
                                       localize_internal::ScoredAt(q, *place_prepared.map, {0, 0, 0}, options)};
     hits[0].map_id = 2, hits[1].map_id = 1;
     EXPECT_GT(hits[0].score, hits[1].score + 0.05);  // the look-alike explains more within 0.3 m
-    for (const LocalizedHit& h : hits) {
-      // Without closeness a hit is ranked by its score, to the last bit (a prior's answers rely on it).
-      EXPECT_EQ(localize_internal::RankFit(h, 0.0, options), h.score);
-      EXPECT_EQ(localize_internal::RankFit(h, weight, options), h.rank_fit);
-    }
-    localize_internal::SortHits(&hits);
+    // Without closeness a hit is ranked by its score, to the last bit (a prior's answers rely on it).
+    LocalizeOptions by_score = options;
+    by_score.closeness_weight = 0;
+    for (const LocalizedHit& h : hits) EXPECT_EQ(localize_internal::RankFit(h, by_score), h.score);
+    localize_internal::SortHits(&hits, options);
     EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
 }
