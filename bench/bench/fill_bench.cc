@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "bench/common/flags.h"
 #include "client/lmd_client.h"
 #include "core/sim/simulate.h"
 #include "core/util/progress_bar.h"
@@ -13,32 +14,20 @@
 namespace lmd::bench {
 
 int RunFillBench(int argc, char** argv) {
-  std::string server = "127.0.0.1:50051", collection = "fill", token;
-  long maps = 0;
-  long batch_size = 100;
-  bool scans = false;
-  for (int i = 0; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--scans") { scans = true; continue; }
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "lmd-bench fill: %s needs a value\n", flag.c_str());
-      return 2;
-    }
-    const std::string value = argv[++i];
-    if (flag == "--server") server = value;
-    else if (flag == "--collection") collection = value;
-    else if (flag == "--token") token = value;
-    else if (flag == "--maps") maps = std::strtol(value.c_str(), nullptr, 10);
-    else if (flag == "--batch") batch_size = std::strtol(value.c_str(), nullptr, 10);
-    else {
-      std::fprintf(stderr, "lmd-bench fill: unknown flag %s\n", flag.c_str());
-      return 2;
-    }
-  }
-  if (maps <= 0 || batch_size <= 0) {
-    std::fprintf(stderr, "lmd-bench fill: --maps and --batch must be positive numbers\n");
+  Flags flags({"server", "collection", "token", "maps", "batch"}, {"scans"});
+  uint64_t maps = 0, batch_size = 0;
+  if (!flags.Parse(argc, argv) || !flags.Count("maps", 1, 100000000, 0, &maps) ||
+      !flags.Count("batch", 1, 100000, 100, &batch_size)) {
+    std::fprintf(stderr, "lmd-bench fill: %s\n", flags.error().c_str());
     return 2;
   }
+  if (!flags.Has("maps")) {
+    std::fprintf(stderr, "lmd-bench fill: --maps is needed\n");
+    return 2;
+  }
+  const std::string server = flags.Get("server", "127.0.0.1:50051"), collection = flags.Get("collection", "fill");
+  const std::string token = flags.Get("token");
+  const bool scans = flags.Has("scans");
   client::ClientOptions options;
   options.target = server;
   options.token = token;
@@ -74,7 +63,7 @@ int RunFillBench(int argc, char** argv) {
     insert->mutable_metadata()->set_collection(collection);
     insert->mutable_metadata()->set_map_id(map.id);
     *insert->mutable_map() = ToProto(map);
-    return batch.maps_size() < batch_size || flush();
+    return static_cast<uint64_t>(batch.maps_size()) < batch_size || flush();
   });
   if (!flush()) {
     std::fprintf(stderr, "lmd-bench fill: insert failed: %s\n", error.c_str());
@@ -82,8 +71,10 @@ int RunFillBench(int argc, char** argv) {
   }
   progress.Done();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("stored %ld maps in '%s' in %.1f s (%.0f maps/s, %.0f calls/s of %ld maps)\n", maps,
-              collection.c_str(), seconds, maps / seconds, maps / seconds / batch_size, batch_size);
+  const double stored = static_cast<double>(maps);
+  std::printf("stored %.0f maps in '%s' in %.1f s (%.0f maps/s, %.0f calls/s of %.0f maps)\n", stored,
+              collection.c_str(), seconds, stored / seconds, stored / seconds / static_cast<double>(batch_size),
+              static_cast<double>(batch_size));
   return 0;
 }
 

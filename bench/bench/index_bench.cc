@@ -30,6 +30,7 @@
 #include <time.h>
 
 #include "bench/bench/sim_descriptors.h"
+#include "bench/common/flags.h"
 #include "core/describe/describer.h"
 #include "core/describe/lmd_codec.h"
 #include "core/index/exhaustive.h"
@@ -63,82 +64,41 @@ void Usage() {
 
 bool ParseArgs(int argc, char** argv, Args* args) {
   for (int i = 0; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](const char* name) -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "lmd-bench index: %s needs a value\n", name);
-        return nullptr;
-      }
-      return argv[++i];
-    };
-    auto number = [&](const char* name, double lo, double hi, double* out) {
-      const char* v = value(name);
-      if (v == nullptr) return false;
-      char* end = nullptr;
-      *out = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !(*out >= lo && *out <= hi)) {
-        std::fprintf(stderr, "lmd-bench index: %s must be a number in [%g, %g], got '%s'\n", name, lo, hi, v);
-        return false;
-      }
-      return true;
-    };
-    double x = 0;
-    if (a == "--json") {
-      args->json = true;
-    } else if (a == "--maps") {
-      if (!number("--maps", 1, 1e7, &x)) return false;
-      args->maps = static_cast<size_t>(x);
-    } else if (a == "--queries") {
-      if (!number("--queries", 1, 1e5, &x)) return false;
-      args->queries = static_cast<size_t>(x);
-    } else if (a == "--seed") {
-      if (!number("--seed", 0, 1e15, &x)) return false;
-      args->seed = static_cast<uint64_t>(x);
-    } else if (a == "--threads") {
-      if (!number("--threads", 1, 256, &x)) return false;
-      args->threads = static_cast<int>(x);
-    } else if (a == "--top-k") {
-      if (!number("--top-k", 1, 1e6, &x)) return false;
-      args->retrieve.top_k = static_cast<size_t>(x);
-    } else if (a == "--max-offset") {
-      if (!number("--max-offset", 0, 100, &x)) return false;
-      args->retrieve.max_offset_m = x;
-    } else if (a == "--max-word-share") {
-      if (!number("--max-word-share", 1e-6, 1, &x)) return false;
-      args->retrieve.max_word_share = x;
-    } else if (a == "--setting") {
-      if (!number("--setting", 1, 8, &x)) return false;
-      args->setting = static_cast<int>(x);
-    } else if (a == "--bits") {
-      if (!number("--bits", 1, 16, &x)) return false;
-      args->bits = static_cast<int>(x);
-    } else if (a == "--inner") {
-      if (!number("--inner", 0, 12, &x)) return false;
-      args->inner_m = x;
-    } else if (a == "--cache") {
-      const char* v = value("--cache");
-      if (v == nullptr) return false;
-      args->cache = v;
-    } else if (a == "--method") {
-      const char* v = value("--method");
-      if (v == nullptr) return false;
-      if (std::strcmp(v, "lmd") == 0) {
-        args->retrieve.method = Method::kLmd;
-      } else if (std::strcmp(v, "bow") == 0) {
-        args->retrieve.method = Method::kBow;
-      } else {
-        std::fprintf(stderr, "lmd-bench index: --method must be lmd or bow, got '%s'\n", v);
-        return false;
-      }
-    } else if (a == "-h" || a == "--help") {
+    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) {
       Usage();
       std::exit(0);
-    } else {
-      std::fprintf(stderr, "lmd-bench index: unknown option '%s'\n", a.c_str());
-      Usage();
-      return false;
     }
   }
+  Flags flags({"maps", "queries", "seed", "threads", "top-k", "max-offset", "max-word-share", "setting", "bits",
+               "inner", "cache", "method"},
+              {"json"});
+  uint64_t maps = 0, queries = 0, threads = 0, top_k = 0, setting = 0, bits = 0;
+  const bool ok = flags.Parse(argc, argv) && flags.Count("maps", 1, 10000000, args->maps, &maps) &&
+                  flags.Count("queries", 1, 100000, args->queries, &queries) &&
+                  flags.Count("seed", 0, UINT64_MAX, args->seed, &args->seed) &&
+                  flags.Count("threads", 1, 256, 0, &threads) &&
+                  flags.Count("top-k", 1, 1000000, args->retrieve.top_k, &top_k) &&
+                  flags.Number("max-offset", 0, 100, args->retrieve.max_offset_m, &args->retrieve.max_offset_m) &&
+                  flags.Number("max-word-share", 1e-6, 1, args->retrieve.max_word_share, &args->retrieve.max_word_share) &&
+                  flags.Count("setting", 1, 8, static_cast<uint64_t>(args->setting), &setting) &&
+                  flags.Count("bits", 1, 16, static_cast<uint64_t>(args->bits), &bits) &&
+                  flags.Number("inner", 0, 12, args->inner_m, &args->inner_m);
+  if (!ok) {
+    std::fprintf(stderr, "lmd-bench index: %s\n", flags.error().c_str());
+    Usage();
+    return false;
+  }
+  args->maps = maps, args->queries = queries, args->retrieve.top_k = top_k;
+  args->threads = static_cast<int>(threads);  // 0: every core
+  args->setting = static_cast<int>(setting), args->bits = static_cast<int>(bits);
+  args->json = flags.Has("json");
+  args->cache = flags.Get("cache");
+  const std::string method = flags.Get("method", "lmd");
+  if (method != "lmd" && method != "bow") {
+    std::fprintf(stderr, "lmd-bench index: --method must be lmd or bow, got '%s'\n", method.c_str());
+    return false;
+  }
+  args->retrieve.method = method == "lmd" ? Method::kLmd : Method::kBow;
   return true;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bench/bench/reobserve.h"
+#include "bench/common/flags.h"
 #include "client/lmd_client.h"
 #include "core/eval/ground_truth.h"
 #include "core/io/carmen_reader.h"
@@ -41,45 +42,30 @@ struct LoadOptions {
 };
 
 bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
-  for (int i = 0; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--json") { options->json = true; continue; }
-    if (flag == "--no-seed") { options->seed = false; continue; }
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "lmd-bench load: %s needs a value\n", flag.c_str());
-      return false;
-    }
-    const std::string value = argv[++i];
-    char* end = nullptr;
-    if (flag == "--server") options->server = value;
-    else if (flag == "--collection") options->collection = value;
-    else if (flag == "--token") options->token = value;
-    else if (flag == "--log") options->log = value;
-    else if (flag == "--mode" && (value == "fleet" || value == "global")) options->fleet = value == "fleet";
-    else if (flag == "--mode") {
-      std::fprintf(stderr, "lmd-bench load: --mode is global or fleet, got '%s'\n", value.c_str());
-      return false;
-    }
-    else if (flag == "--robots") options->robots = static_cast<int>(std::strtol(value.c_str(), &end, 10));
-    else if (flag == "--first-robot") options->first_robot = static_cast<int>(std::strtol(value.c_str(), &end, 10));
-    else if (flag == "--hz") options->hz = std::strtod(value.c_str(), &end);
-    else if (flag == "--seconds") options->seconds = std::strtod(value.c_str(), &end);
-    else {
-      std::fprintf(stderr, "lmd-bench load: unknown flag %s\n", flag.c_str());
-      return false;
-    }
-    if (end != nullptr && *end != '\0') {
-      std::fprintf(stderr, "lmd-bench load: %s expects a number, got '%s'\n", flag.c_str(), value.c_str());
-      return false;
-    }
-  }
-  if (options->robots < 1 || options->robots > 5000 || options->first_robot < 0 || options->first_robot > 100000 ||
-      !(options->hz > 0) || options->hz > 100 || !(options->seconds > 0) || options->seconds > 3600) {
-    std::fprintf(stderr,
-                 "lmd-bench load: need 1 <= robots <= 5000, 0 <= first-robot <= 100000, 0 < hz <= 100, "
-                 "0 < seconds <= 3600\n");
+  Flags flags({"server", "collection", "token", "log", "mode", "robots", "first-robot", "hz", "seconds"},
+              {"json", "no-seed"});
+  uint64_t robots = 0, first_robot = 0;
+  if (!flags.Parse(argc, argv) || !flags.Count("robots", 1, 5000, static_cast<uint64_t>(options->robots), &robots) ||
+      !flags.Count("first-robot", 0, 100000, static_cast<uint64_t>(options->first_robot), &first_robot) ||
+      !flags.Number("hz", 1e-6, 100, options->hz, &options->hz) ||
+      !flags.Number("seconds", 1e-6, 3600, options->seconds, &options->seconds)) {
+    std::fprintf(stderr, "lmd-bench load: %s\n", flags.error().c_str());
     return false;
   }
+  const std::string mode = flags.Get("mode", options->fleet ? "fleet" : "global");
+  if (mode != "fleet" && mode != "global") {
+    std::fprintf(stderr, "lmd-bench load: --mode is global or fleet, got '%s'\n", mode.c_str());
+    return false;
+  }
+  options->robots = static_cast<int>(robots);
+  options->first_robot = static_cast<int>(first_robot);
+  options->fleet = mode == "fleet";
+  options->server = flags.Get("server", options->server);
+  options->collection = flags.Get("collection", options->collection);
+  options->token = flags.Get("token", options->token);
+  options->log = flags.Get("log", options->log);
+  options->json = flags.Has("json");
+  options->seed = !flags.Has("no-seed");
   return true;
 }
 

@@ -48,6 +48,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -57,6 +58,7 @@
 #include <vector>
 
 #include "bench/bench/reobserve.h"
+#include "bench/common/flags.h"
 #include "core/align/prepared_map.h"
 #include "core/eval/ground_truth.h"
 #include "core/eval/retrieval_metrics.h"
@@ -96,63 +98,33 @@ void Usage() {
 
 bool ParseArgs(int argc, char** argv, Args* args) {
   for (int i = 0; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto number = [&](const char* name, double lo, double hi, double* out) {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "lmd-bench places: %s needs a value\n", name);
-        return false;
-      }
-      const char* v = argv[++i];
-      char* end = nullptr;
-      *out = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !(*out >= lo && *out <= hi)) {
-        std::fprintf(stderr, "lmd-bench places: %s must be a number in [%g, %g], got '%s'\n", name, lo, hi, v);
-        return false;
-      }
-      return true;
-    };
-    double x = 0;
-    if (a == "--json") {
-      args->json = true;
-    } else if (a == "--maps") {
-      if (!number("--maps", 1, PlaceIndex::kMaxMaps, &x)) return false;
-      args->maps = static_cast<size_t>(x);
-    } else if (a == "--queries") {
-      if (!number("--queries", 1, 1e5, &x)) return false;
-      args->queries = static_cast<size_t>(x);
-    } else if (a == "--seed") {
-      if (!number("--seed", 0, 1e15, &x)) return false;
-      args->seed = static_cast<uint64_t>(x);
-    } else if (a == "--threads") {
-      if (!number("--threads", 1, 256, &x)) return false;
-      args->threads = static_cast<int>(x);
-    } else if (a == "--cache-mb") {
-      if (!number("--cache-mb", 0, 1 << 20, &x)) return false;
-      args->cache_mb = static_cast<size_t>(x);
-    } else if (a == "--check-every") {
-      if (!number("--check-every", 0, 1e9, &x)) return false;
-      args->check_every = static_cast<size_t>(x);
-    } else if (a == "--max-bucket") {
-      if (!number("--max-bucket", 0, 1e9, &x)) return false;
-      args->max_bucket = static_cast<long>(x);
-    } else if (a == "--max-candidates") {
-      if (!number("--max-candidates", 0, 1e12, &x)) return false;
-      args->max_candidates = static_cast<long>(x);
-    } else if (a == "--csv") {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "lmd-bench places: --csv needs a value\n");
-        return false;
-      }
-      args->csv = argv[++i];
-    } else if (a == "-h" || a == "--help") {
+    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) {
       Usage();
       std::exit(0);
-    } else {
-      std::fprintf(stderr, "lmd-bench places: unknown option '%s'\n", a.c_str());
-      Usage();
-      return false;
     }
   }
+  Flags flags({"maps", "queries", "seed", "threads", "cache-mb", "check-every", "max-bucket", "max-candidates", "csv"},
+              {"json"});
+  uint64_t maps = 0, queries = 0, threads = 0, cache_mb = 0, check_every = 0, max_bucket = 0, max_candidates = 0;
+  const bool ok = flags.Parse(argc, argv) && flags.Count("maps", 1, PlaceIndex::kMaxMaps, args->maps, &maps) &&
+                  flags.Count("queries", 1, 100000, args->queries, &queries) &&
+                  flags.Count("seed", 0, UINT64_MAX, args->seed, &args->seed) &&
+                  flags.Count("threads", 1, 256, static_cast<uint64_t>(args->threads), &threads) &&
+                  flags.Count("cache-mb", 0, 1 << 20, args->cache_mb, &cache_mb) &&
+                  flags.Count("check-every", 0, 1000000000, args->check_every, &check_every) &&
+                  flags.Count("max-bucket", 0, 1000000000, 0, &max_bucket) &&
+                  flags.Count("max-candidates", 0, 1000000000000, 0, &max_candidates);
+  if (!ok) {
+    std::fprintf(stderr, "lmd-bench places: %s\n", flags.error().c_str());
+    Usage();
+    return false;
+  }
+  args->maps = maps, args->queries = queries, args->threads = static_cast<int>(threads);
+  args->cache_mb = cache_mb, args->check_every = check_every;
+  if (flags.Has("max-bucket")) args->max_bucket = static_cast<long>(max_bucket);
+  if (flags.Has("max-candidates")) args->max_candidates = static_cast<long>(max_candidates);
+  args->json = flags.Has("json");
+  args->csv = flags.Get("csv");
   return true;
 }
 

@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/common/flags.h"
 #include "client/lmd_client.h"
 #include "core/util/split.h"
 
@@ -50,23 +51,19 @@ double Percentile(std::vector<double> values, double q) {
 }  // namespace
 
 int RunReadsBench(int argc, char** argv) {
-  std::string servers_flag, collection;
-  long threads = 4;
+  Flags flags({"servers", "collection", "threads", "seconds"});
+  uint64_t thread_count = 4;
   double seconds = 10;
-  for (int i = 0; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i], value = argv[i + 1];
-    if (flag == "--servers") servers_flag = value;
-    else if (flag == "--collection") collection = value;
-    else if (flag == "--threads") threads = std::strtol(value.c_str(), nullptr, 10);
-    else if (flag == "--seconds") seconds = std::strtod(value.c_str(), nullptr);
-    else {
-      std::fprintf(stderr, "lmd-bench reads: unknown flag %s\n", flag.c_str());
-      return 2;
-    }
+  if (!flags.Parse(argc, argv) || !flags.Count("threads", 1, 1024, 4, &thread_count) ||
+      !flags.Number("seconds", 1e-3, 86400, 10, &seconds)) {
+    std::fprintf(stderr, "lmd-bench reads: %s\n", flags.error().c_str());
+    return 2;
   }
-  const std::vector<std::string> servers = SplitCommas(servers_flag);
-  if (argc % 2 != 0 || servers.empty() || collection.empty() || threads <= 0 || !(seconds > 0)) {
-    std::fprintf(stderr, "lmd-bench reads: needs --servers and --collection, a positive --threads and --seconds\n");
+  const long threads = static_cast<long>(thread_count);
+  const std::vector<std::string> servers = SplitCommas(flags.Get("servers"));
+  const std::string collection = flags.Get("collection");
+  if (servers.empty() || collection.empty()) {
+    std::fprintf(stderr, "lmd-bench reads: needs --servers and --collection\n");
     return 2;
   }
   std::vector<std::unique_ptr<client::LmdClient>> clients;

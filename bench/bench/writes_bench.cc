@@ -12,6 +12,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "bench/common/flags.h"
 #include "core/sim/simulate.h"
 #include "core/util/split.h"
 #include "lmd/v1/lmd.grpc.pb.h"
@@ -147,35 +148,22 @@ int Verify(const std::vector<std::string>& servers, const std::string& collectio
 }  // namespace
 
 int RunWritesBench(int argc, char** argv) {
-  std::string servers_flag, collection = "replicated", acked;
+  Flags flags({"servers", "collection", "acked", "rate", "seconds", "copies"}, {"verify"});
   double rate = 100, seconds = 10;
-  bool verify = false;
-  long copies = -1;
-  for (int i = 0; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--verify") { verify = true; continue; }
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "lmd-bench writes: %s needs a value\n", flag.c_str());
-      return 2;
-    }
-    const std::string value = argv[++i];
-    if (flag == "--servers") servers_flag = value;
-    else if (flag == "--collection") collection = value;
-    else if (flag == "--acked") acked = value;
-    else if (flag == "--rate") rate = std::strtod(value.c_str(), nullptr);
-    else if (flag == "--seconds") seconds = std::strtod(value.c_str(), nullptr);
-    else if (flag == "--copies") copies = std::strtol(value.c_str(), nullptr, 10);
-    else {
-      std::fprintf(stderr, "lmd-bench writes: unknown flag %s\n", flag.c_str());
-      return 2;
-    }
-  }
-  const std::vector<std::string> servers = SplitCommas(servers_flag);
-  if (servers.empty() || acked.empty() || !(rate > 0) || !(seconds > 0)) {
-    std::fprintf(stderr, "lmd-bench writes: needs --servers, --acked, and a positive --rate and --seconds\n");
+  uint64_t copies = 0;
+  if (!flags.Parse(argc, argv) || !flags.Number("rate", 1e-3, 1e6, 100, &rate) ||
+      !flags.Number("seconds", 1e-3, 86400, 10, &seconds) || !flags.Count("copies", 1, 9, 1, &copies)) {
+    std::fprintf(stderr, "lmd-bench writes: %s\n", flags.error().c_str());
     return 2;
   }
-  if (verify) return Verify(servers, collection, acked, copies < 0 ? servers.size() : static_cast<size_t>(copies));
+  const std::vector<std::string> servers = SplitCommas(flags.Get("servers"));
+  const std::string collection = flags.Get("collection", "replicated"), acked = flags.Get("acked");
+  const bool verify = flags.Has("verify");
+  if (servers.empty() || acked.empty()) {
+    std::fprintf(stderr, "lmd-bench writes: needs --servers and --acked\n");
+    return 2;
+  }
+  if (verify) return Verify(servers, collection, acked, flags.Has("copies") ? static_cast<size_t>(copies) : servers.size());
   return Write(servers, collection, rate, seconds, acked);
 }
 

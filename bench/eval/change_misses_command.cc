@@ -34,7 +34,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/answer_scoring.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
@@ -173,8 +173,8 @@ void Print(const ChangeCounts& c) {
 }  // namespace
 
 int RunChangeMisses(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"global"})) {
+  Flags args({"log"}, {"global"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval change-misses: %s\n", args.error().c_str());
     return 2;
   }

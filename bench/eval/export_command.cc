@@ -17,7 +17,7 @@
 #include <filesystem>
 #include <string>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
@@ -25,8 +25,8 @@
 namespace lmd::eval {
 
 int RunExport(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0)) {
+  Flags args({"log", "out"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
   }

@@ -24,7 +24,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/stored_log.h"
@@ -111,8 +111,8 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
 }  // namespace
 
 int RunGlobalMisses(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"anchored"})) {
+  Flags args({"log", "every"}, {"anchored"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval global-misses: %s\n", args.error().c_str());
     return 2;
   }

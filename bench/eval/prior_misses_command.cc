@@ -28,7 +28,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/stored_log.h"
@@ -107,8 +107,8 @@ void Print(const PriorMissCounts& c) {
 }  // namespace
 
 int RunPriorMisses(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"one-pose", "no-site", "tracking"})) {
+  Flags args({"log"}, {"one-pose", "no-site", "tracking"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;
   }

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "core/describe/describer.h"
@@ -19,8 +19,8 @@
 namespace lmd::eval {
 
 int RunRender(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"demo", "cog"})) {
+  Flags args({"log", "map", "out"}, {"demo", "cog"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval render: %s\n", args.error().c_str());
     return 2;
   }
@@ -45,13 +45,8 @@ int RunRender(int argc, char** argv) {
   LocalMapOptions lm;
   lm.id_prefix = name;
   const std::vector<LocalMap> maps = BuildLocalMaps(log, lm);
-  long index = 0;
-  try {
-    index = std::stol(args.Get("map", "0"));
-  } catch (...) {
-    index = -1;
-  }
-  if (index < 0 || static_cast<size_t>(index) >= maps.size()) {
+  uint64_t index = 0;
+  if (maps.empty() || !args.Count("map", 0, maps.size() - 1, 0, &index)) {
     std::fprintf(stderr, "lmd-eval render: --map must be in [0, %zu)\n", maps.size());
     return 2;
   }

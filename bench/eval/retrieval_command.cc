@@ -35,7 +35,7 @@
 #include <unistd.h>
 
 #include "bench/eval/answer_scoring.h"
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "bench/eval/eval_dataset.h"
@@ -573,15 +573,9 @@ std::string Machine() {
 }  // namespace
 
 int RunRetrieval(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"ablations"})) {
+  Flags args({"log", "out", "methods", "threads", "max-queries", "seed", "truth-frame", "truth-odom"}, {"ablations"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval retrieval: %s\n", args.error().c_str());
-    return 2;
-  }
-  std::string no_logs;
-  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
-  if (logs.empty()) {
-    std::fprintf(stderr, "lmd-eval retrieval: %s\n", no_logs.c_str());
     return 2;
   }
   const std::string out_dir = args.Get("out", "out/retrieval");
@@ -589,12 +583,19 @@ int RunRetrieval(int argc, char** argv) {
   DatasetOptions dopt;
   dopt.truth_frame = args.Get("truth-frame");
   dopt.truth_odom = args.Get("truth-odom");
-  try {
-    ro.threads = std::stoi(args.Get("threads", "2"));
-    ro.max_queries = std::stoul(args.Get("max-queries", "0"));
-    dopt.seed = std::stoull(args.Get("seed", "1"));
-  } catch (...) {
-    std::fprintf(stderr, "lmd-eval retrieval: --threads, --max-queries and --seed take numbers\n");
+  uint64_t threads = 2, max_queries = 0;
+  if (!args.Count("threads", 1, 256, 2, &threads) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) ||
+      !args.Count("seed", 0, UINT64_MAX, 1, &dopt.seed)) {
+    std::fprintf(stderr, "lmd-eval retrieval: %s\n", args.error().c_str());
+    return 2;
+  }
+  ro.threads = static_cast<int>(threads);
+  ro.max_queries = static_cast<size_t>(max_queries);
+  // The logs are looked for once the options are checked: a mistyped option is refused first.
+  std::string no_logs;
+  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
+  if (logs.empty()) {
+    std::fprintf(stderr, "lmd-eval retrieval: %s\n", no_logs.c_str());
     return 2;
   }
   dopt.threads = ro.threads;

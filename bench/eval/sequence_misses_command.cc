@@ -24,7 +24,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/sequence_context.h"
@@ -113,8 +113,8 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
 }  // namespace
 
 int RunSequenceMisses(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"list"})) {
+  Flags args({"log", "every"}, {"list"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval sequence-misses: %s\n", args.error().c_str());
     return 2;
   }

@@ -21,7 +21,7 @@
 #include <unordered_set>
 
 #include "bench/eval/answer_scoring.h"
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "core/util/split.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
@@ -306,8 +306,8 @@ std::string Now() {
 }  // namespace
 
 int RunServed(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"no-changes", "anchor"})) {
+  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame", "truth-odom", "tuned-on"}, {"no-changes", "anchor"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
@@ -316,15 +316,15 @@ int RunServed(int argc, char** argv) {
   dataset.every_map = true;
   dataset.truth_frame = args.Get("truth-frame");
   dataset.truth_odom = args.Get("truth-odom");
-  try {
-    options.max_queries = std::stoul(args.Get("max-queries", "0"));
-    options.threads = std::stoi(args.Get("threads", "1"));
-    options.verify = static_cast<uint32_t>(std::stoul(args.Get("verify", "0")));
-    dataset.seed = std::stoull(args.Get("seed", "1"));
-  } catch (...) {
-    std::fprintf(stderr, "lmd-eval served: --max-queries, --threads, --verify and --seed take numbers\n");
+  uint64_t max_queries = 0, threads = 1, verify = 0;
+  if (!args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
+      !args.Count("verify", 0, 1000000, 0, &verify) || !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
+    std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
+  options.max_queries = static_cast<size_t>(max_queries);
+  options.threads = static_cast<int>(threads);
+  options.verify = static_cast<uint32_t>(verify);
   options.changes = !args.Has("no-changes");
   const std::string mode = args.Get("mode", "global");
   if (mode == "prior") {

@@ -38,14 +38,12 @@ int ForEachServedLog(const std::vector<std::string>& named, const std::string& c
   return 0;
 }
 
-bool ParseEvery(const Args& args, const std::string& command, size_t* every) {
-  *every = 0;
-  try {
-    *every = std::stoul(args.Get("every", "1"));
-  } catch (const std::exception&) {
-  }
-  if (*every == 0) std::fprintf(stderr, "lmd-eval %s: --every takes a number of 1 or more\n", command.c_str());
-  return *every > 0;
+bool ParseEvery(Flags& args, const std::string& command, size_t* every) {
+  uint64_t n = 1;
+  const bool ok = args.Count("every", 1, 1000000, 1, &n);
+  if (!ok) std::fprintf(stderr, "lmd-eval %s: %s\n", command.c_str(), args.error().c_str());
+  *every = static_cast<size_t>(n);
+  return ok;
 }
 
 namespace {

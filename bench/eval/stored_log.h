@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/eval_dataset.h"
 #include "core/localize/memory_collection.h"
 
@@ -31,7 +31,7 @@ int ForEachServedLog(const std::vector<std::string>& named, const std::string& c
 
 // --every N (default 1): every Nth query. False, with one line on stderr
 // prefixed "lmd-eval `command`: ", when it is not a number of 1 or more.
-bool ParseEvery(const Args& args, const std::string& command, size_t* every);
+bool ParseEvery(Flags& args, const std::string& command, size_t* every);
 
 // One log's misses (or "all"), by class.
 struct MissCounts {

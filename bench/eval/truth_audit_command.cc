@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "bench/eval/answer_scoring.h"
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/eval_dataset.h"
 #include "bench/eval/stored_log.h"
@@ -141,8 +141,8 @@ void Print(const AuditCounts& c) {
 }  // namespace
 
 int RunTruthAudit(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0, {"list"})) {
+  Flags args({"log", "every"}, {"list"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval truth-audit: %s\n", args.error().c_str());
     return 2;
   }

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/eval/args.h"
+#include "bench/common/flags.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "core/eval/ground_truth.h"
@@ -104,27 +104,33 @@ std::string Json(const std::vector<DatasetResult>& results) {
 }  // namespace
 
 int RunViewpoints(int argc, char** argv) {
-  Args args;
-  if (!args.Parse(argc, argv, 0)) {
+  Flags args({"log", "out", "crop", "clear", "seed-stride", "min-wall", "room-min-area", "peak"});
+  if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval viewpoints: %s\n", args.error().c_str());
-    return 2;
-  }
-  std::string no_logs;
-  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
-  if (logs.empty()) {
-    std::fprintf(stderr, "lmd-eval viewpoints: %s\n", no_logs.c_str());
     return 2;
   }
   const std::string out_dir = args.Get("out", "out");
   ViewpointOptions options;
   // Tuning knobs (defaults = library defaults): --crop M (GridOptions::crop_m),
   // --clear M (no_return_clear_m), --seed-stride N, --min-wall M, --room-min-area M2, --peak F.
-  if (args.Has("crop")) options.grid.crop_m = std::stod(args.Get("crop"));
-  if (args.Has("clear")) options.grid.no_return_clear_m = std::stod(args.Get("clear"));
-  if (args.Has("seed-stride")) options.room_seed_stride = std::stoi(args.Get("seed-stride"));
-  if (args.Has("min-wall")) options.walls.min_length_m = std::stod(args.Get("min-wall"));
-  if (args.Has("room-min-area")) options.room_min_area_m2 = std::stod(args.Get("room-min-area"));
-  if (args.Has("peak")) options.room_peak_fraction = std::stod(args.Get("peak"));
+  uint64_t seed_stride = static_cast<uint64_t>(options.room_seed_stride);
+  if (!args.Number("crop", 0, 1000, options.grid.crop_m, &options.grid.crop_m) ||
+      !args.Number("clear", 0, 1000, options.grid.no_return_clear_m, &options.grid.no_return_clear_m) ||
+      !args.Count("seed-stride", 1, 1000, seed_stride, &seed_stride) ||
+      !args.Number("min-wall", 0, 100, options.walls.min_length_m, &options.walls.min_length_m) ||
+      !args.Number("room-min-area", 0, 10000, options.room_min_area_m2, &options.room_min_area_m2) ||
+      !args.Number("peak", 0, 1, options.room_peak_fraction, &options.room_peak_fraction)) {
+    std::fprintf(stderr, "lmd-eval viewpoints: %s\n", args.error().c_str());
+    return 2;
+  }
+  options.room_seed_stride = static_cast<int>(seed_stride);
+  // The logs are looked for once the options are checked: a mistyped option is refused first.
+  std::string no_logs;
+  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
+  if (logs.empty()) {
+    std::fprintf(stderr, "lmd-eval viewpoints: %s\n", no_logs.c_str());
+    return 2;
+  }
 
   std::vector<DatasetResult> results;
   for (const std::string& log : logs) {
