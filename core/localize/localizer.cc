@@ -41,9 +41,7 @@ LocalizedHit Scored(const LocalQuery& query, const PreparedMap& db, const ScanMa
 }
 
 double RankFit(const LocalizedHit& hit, const LocalizeOptions& options) {
-  const double w = options.closeness_weight;
-  return (1 - w) * hit.overlap + w * hit.closeness -
-         options.conflict_weight * hit.conflict - options.reverse_conflict_weight * hit.reverse_conflict;
+  return hit.score + options.closeness_weight * (hit.closeness - hit.overlap);
 }
 
 LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose2& pose, const LocalizeOptions& options) {

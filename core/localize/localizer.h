@@ -146,7 +146,7 @@ struct LocalizeOptions {
   // closeness picked maps that explain part of the query closely at a pose a
   // few decimetres off (lmd-bench load --mode fleet, 200 robots: sure and
   // wrong 1 -> 6, all under 1 m off, right fixes .999 -> .996; served
-  // tracking and prior priors: the same place@1, sure and wrong 46 -> 43
+  // tracking and loose priors: the same place@1, sure and wrong 46 -> 43
   // and 41 -> 42). A sequence's hypotheses are ranked alike, by the mean of
   // their maps' blended fits (sequence.h): lmd-eval sequence-misses --every
   // 3, 155 -> 147 misses (tuning logs 27 -> 26; 1 instead of 0.5: 147);
