@@ -39,10 +39,11 @@ struct LoadOptions {
   bool seed = true;
   std::string log;  // a CARMEN log instead of the simulated world
   bool fleet = false;  // --mode fleet: robots track with priors (else every query is global)
+  std::string answers;  // --answers FILE: one row per DetectChanges answer (TSV)
 };
 
 bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
-  Flags flags({"server", "collection", "token", "log", "mode", "robots", "first-robot", "hz", "seconds"},
+  Flags flags({"server", "collection", "token", "log", "mode", "robots", "first-robot", "hz", "seconds", "answers"},
               {"json", "no-seed"});
   uint64_t robots = 0, first_robot = 0;
   if (!flags.Parse(argc, argv) || !flags.Count("robots", 1, 5000, static_cast<uint64_t>(options->robots), &robots) ||
@@ -64,6 +65,7 @@ bool ParseLoadOptions(int argc, char** argv, LoadOptions* options) {
   options->collection = flags.Get("collection", options->collection);
   options->token = flags.Get("token", options->token);
   options->log = flags.Get("log", options->log);
+  options->answers = flags.Get("answers", options->answers);
   options->json = flags.Has("json");
   options->seed = !flags.Has("no-seed");
   return true;
@@ -155,6 +157,19 @@ Result<World> LogWorld(const LoadOptions& options, size_t ticks) {
   return world;
 }
 
+// One DetectChanges of a run, as answered: what lmd-bench load reports is
+// counted from these, and --answers writes them out.
+struct AnswerRow {
+  bool answered = false;  // the call returned OK
+  const char* asked = "global";  // global, prior or sequence
+  double prior_radius_m = 0.0, latency_ms = 0.0;
+  bool reduced_depth = false, localized = false, prior_failed = false, posed = false;
+  int sequence_maps = 0;
+  std::string top_hit;  // "" if none
+  Pose2 got;  // the query's pose in the collection's frame, if posed
+  bool right = false;  // posed within 0.2 m / 1 deg of the truth (the site frame is the world's)
+};
+
 // A robot of --mode fleet: it starts where it knows it is (a dock: its
 // first map's true pose) and tracks with priors from its last fix and its
 // drifting odometry. An answer lmdd is not sure of, or a failed prior (where
@@ -170,19 +185,6 @@ struct FleetRobot {
   bool lost = false;
   Pose2 fix;          // its last sure pose in the site frame
   size_t fixed_at = 0;  // ... the tick of that map
-  // Outcomes, over its answered DetectChanges.
-  size_t asked = 0, right = 0, sure = 0, sure_wrong = 0, sure_unposed = 0, by_prior = 0, by_sequence = 0,
-         prior_failed = 0;
-  // Sure and wrong, by how it was asked, and those off by less than 1 m
-  // (the right place at a slightly wrong pose).
-  size_t wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
-  // Each answered tick, whether its pose was right and its prior failed
-  // (whether a seeded map shows the place is scored after the run).
-  struct Answer {
-    size_t tick = 0;
-    bool right = false, prior_failed = false;
-  };
-  std::vector<Answer> answers;
 };
 
 constexpr size_t kSequenceStepTicks = 3;
@@ -213,33 +215,34 @@ void AskAsTracked(const std::vector<LocalMap>& maps, size_t t, FleetRobot* robot
   }
 }
 
-// Scores the answer against the truth (the site frame is the world's) and
-// updates the robot's state.
-void Track(const std::vector<LocalMap>& maps, size_t t, const v1::DetectChangesResponse& response, FleetRobot* robot) {
-  const LocalMap& map = maps[t];
+// The answer to a DetectChanges of `map`, scored against its truth (the
+// site frame is the world's).
+AnswerRow ReadAnswer(const LocalMap& map, const v1::DetectChangesRequest& request,
+                     const v1::DetectChangesResponse& response) {
   const v1::Localization& verdict = response.localization();
-  ++robot->asked;
-  robot->by_prior += verdict.prior_used();
-  robot->prior_failed += verdict.prior_failed();
-  robot->by_sequence += verdict.sequence_maps() > 0;
-  const bool posed = verdict.has_collection_pose();
-  const Pose2 got = posed ? FromProto(verdict.collection_pose()) : Pose2{};
+  AnswerRow row;
+  row.answered = true;
+  row.asked = request.has_prior() ? "prior" : request.sequence_size() > 0 ? "sequence" : "global";
+  row.prior_radius_m = request.has_prior() ? request.prior().radius_m() : 0.0;
+  row.reduced_depth = response.reduced_depth();
+  row.localized = verdict.localized();
+  row.prior_failed = verdict.prior_failed();
+  row.sequence_maps = static_cast<int>(verdict.sequence_maps());
+  row.posed = verdict.has_collection_pose();
+  if (response.hits_size() > 0) row.top_hit = response.hits(0).hit().map_id();
+  if (row.posed) row.got = FromProto(verdict.collection_pose());
   const Pose2& truth = map.truth.global_frame;
-  const bool right = posed && std::hypot(got.x - truth.x, got.y - truth.y) <= 0.2 &&
-                     std::abs(std::remainder(got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
-  robot->right += right;
-  robot->answers.push_back({t, right, verdict.prior_failed()});
-  robot->sure += verdict.localized();
-  const bool sure_wrong = verdict.localized() && posed && !right;
-  robot->sure_wrong += sure_wrong;
-  robot->wrong_by_prior += sure_wrong && verdict.prior_used();
-  robot->wrong_by_sequence += sure_wrong && verdict.sequence_maps() > 0;
-  robot->wrong_within_1m += sure_wrong && std::hypot(got.x - truth.x, got.y - truth.y) < 1.0;
-  robot->sure_unposed += verdict.localized() && !posed;  // no returned hit that agrees with the top one is anchored
-  if (verdict.localized() && posed) {
-    robot->lost = false, robot->fix = got, robot->fixed_at = t;
+  row.right = row.posed && std::hypot(row.got.x - truth.x, row.got.y - truth.y) <= 0.2 &&
+              std::abs(std::remainder(row.got.theta - truth.theta, 2 * M_PI)) <= M_PI / 180;
+  return row;
+}
+
+// A fleet robot's state after its answer of tick t.
+void Track(const std::vector<LocalMap>& maps, size_t t, const AnswerRow& answer, FleetRobot* robot) {
+  if (answer.localized && answer.posed) {
+    robot->lost = false, robot->fix = answer.got, robot->fixed_at = t;
   } else if (!robot->lost) {
-    const double travel = map.truth.travel_start - maps[robot->fixed_at].truth.travel_start;
+    const double travel = maps[t].truth.travel_start - maps[robot->fixed_at].truth.travel_start;
     robot->lost = DriftRadius(travel, OdometryDrift{}) > kMaxPriorRadiusM;
   }
 }
@@ -264,34 +267,76 @@ class SeededPlaces {
   std::vector<std::pair<Pose2, PlaceOf>> places_;
 };
 
-void PrintFleet(const std::vector<FleetRobot>& fleet, const std::vector<LocalMap>& seed,
+double PositionError(const AnswerRow& answer, const LocalMap& map) {
+  return std::hypot(answer.got.x - map.truth.global_frame.x, answer.got.y - map.truth.global_frame.y);
+}
+
+double HeadingErrorDeg(const AnswerRow& answer, const LocalMap& map) {
+  return std::abs(std::remainder(answer.got.theta - map.truth.global_frame.theta, 2 * M_PI)) * 180 / M_PI;
+}
+
+void PrintFleet(const std::vector<std::vector<AnswerRow>>& rows, const std::vector<LocalMap>& seed,
                 const std::vector<std::vector<LocalMap>>& robot_maps) {
-  FleetRobot all;
   const SeededPlaces seeded(seed);
+  size_t asked = 0, right = 0, sure = 0, sure_unposed = 0, by_prior = 0, by_sequence = 0, prior_failed = 0;
+  // Sure and wrong: all, by how it was asked, and those off by less than 1 m
+  // (the right place at a slightly wrong pose).
+  size_t sure_wrong = 0, wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
   // Answers where a seeded map shows the place: all, right, failed priors.
   size_t at_seeded = 0, right_seeded = 0, failed_seeded = 0;
-  for (size_t i = 0; i < fleet.size(); ++i) {
-    const FleetRobot& r = fleet[i];
-    all.asked += r.asked, all.right += r.right, all.sure += r.sure, all.sure_wrong += r.sure_wrong;
-    all.sure_unposed += r.sure_unposed;
-    all.wrong_by_prior += r.wrong_by_prior, all.wrong_by_sequence += r.wrong_by_sequence;
-    all.wrong_within_1m += r.wrong_within_1m;
-    all.by_prior += r.by_prior, all.by_sequence += r.by_sequence, all.prior_failed += r.prior_failed;
-    for (const FleetRobot::Answer& a : r.answers) {
-      if (!seeded.Shows(robot_maps[i][a.tick])) continue;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    for (size_t t = 0; t < rows[r].size(); ++t) {
+      const AnswerRow& a = rows[r][t];
+      if (!a.answered) continue;
+      const bool prior = std::string(a.asked) == "prior", sequence = std::string(a.asked) == "sequence";
+      ++asked, right += a.right, sure += a.localized, sure_unposed += a.localized && !a.posed;
+      by_prior += prior, by_sequence += sequence, prior_failed += a.prior_failed;
+      if (a.localized && a.posed && !a.right) {
+        ++sure_wrong, wrong_by_prior += prior, wrong_by_sequence += sequence;
+        wrong_within_1m += PositionError(a, robot_maps[r][t]) < 1.0;
+      }
+      if (!seeded.Shows(robot_maps[r][t])) continue;
       ++at_seeded, right_seeded += a.right, failed_seeded += a.prior_failed;
     }
   }
-  const double n = std::max<double>(1.0, static_cast<double>(all.asked));
+  const double n = std::max<double>(1.0, static_cast<double>(asked));
   std::printf("fleet: %zu answers, right fixes %zu (%.3f; place and pose within 0.2 m / 1 deg; at places a seeded map "
               "shows %zu of %zu, %.3f), sure %zu (%.3f), "
               "sure and wrong %zu (by prior %zu, by sequence %zu; %zu off by less than 1 m), sure without a site pose "
               "%zu; by prior %zu (of them failed %zu, %zu at a place a seeded map shows), by sequence %zu, global %zu\n",
-              all.asked, all.right, all.right / n, right_seeded, at_seeded,
-              static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), all.sure, all.sure / n,
-              all.sure_wrong, all.wrong_by_prior, all.wrong_by_sequence, all.wrong_within_1m, all.sure_unposed,
-              all.by_prior, all.prior_failed, failed_seeded, all.by_sequence,
-              all.asked - all.by_prior - all.by_sequence);
+              asked, right, right / n, right_seeded, at_seeded,
+              static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), sure, sure / n, sure_wrong,
+              wrong_by_prior, wrong_by_sequence, wrong_within_1m, sure_unposed, by_prior, prior_failed, failed_seeded,
+              by_sequence, asked - by_prior - by_sequence);
+}
+
+// --answers: one line per DetectChanges of the run, tab-separated, with a
+// header; the truth is the map's pose in the world (= site) frame.
+Status WriteAnswers(const std::string& path, const std::vector<std::vector<AnswerRow>>& rows,
+                    const std::vector<LocalMap>& seed, const std::vector<std::vector<LocalMap>>& robot_maps,
+                    int first_robot) {
+  std::FILE* out = std::fopen(path.c_str(), "w");
+  if (out == nullptr) return Status::InvalidArgument("cannot write " + path);
+  std::fprintf(out, "robot\ttick\tanswered\tasked\tprior_radius_m\treduced_depth\tlatency_ms\tlocalized\t"
+                    "prior_failed\tsequence_maps\ttop_hit\ttop_hit_shows_place\tposed\tright\terror_m\t"
+                    "error_deg\ttruth_x\ttruth_y\ttruth_theta\tgot_x\tgot_y\tgot_theta\n");
+  for (size_t r = 0; r < rows.size(); ++r) {
+    for (size_t t = 0; t < rows[r].size(); ++t) {
+      const AnswerRow& a = rows[r][t];
+      const LocalMap& map = robot_maps[r][t];
+      const LocalMap* hit = MapOfId(a.top_hit, seed, robot_maps, first_robot);
+      const Pose2& truth = map.truth.global_frame;
+      std::fprintf(out, "robot%zu\t%zu\t%d\t%s\t%.2f\t%d\t%.2f\t%d\t%d\t%d\t%s\t%s\t%d\t%d\t%.3f\t%.2f\t%.3f\t"
+                        "%.3f\t%.4f\t%.3f\t%.3f\t%.4f\n",
+                   first_robot + r, t, a.answered, a.asked, a.prior_radius_m, a.reduced_depth, a.latency_ms,
+                   a.localized, a.prior_failed, a.sequence_maps, a.top_hit.empty() ? "-" : a.top_hit.c_str(),
+                   hit == nullptr ? "-" : PlaceOverlap(map, *hit) >= 0.5 ? "1" : "0", a.posed, a.right,
+                   a.posed ? PositionError(a, map) : NAN, a.posed ? HeadingErrorDeg(a, map) : NAN, truth.x, truth.y,
+                   truth.theta, a.got.x, a.got.y, a.got.theta);
+    }
+  }
+  if (std::fclose(out) != 0) return Status::InvalidArgument("cannot write " + path);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -349,12 +394,10 @@ int RunLoadBench(int argc, char** argv) {
   std::vector<double> latencies_ms;  // guarded by mutex
   std::atomic<long> errors{0};
   std::atomic<long> calls{0};
-  std::atomic<long> detects_ok{0};
-  std::atomic<long> reduced{0};  // of those, answered at lmdd's busy depth
   std::string first_error;           // guarded by mutex
-  // Per robot and tick, the top hit of its DetectChanges ("" if none).
-  std::vector<std::vector<std::string>> top_hits(options.robots);
-  for (int r = 0; r < options.robots; ++r) top_hits[r].resize(plans[r].size());
+  // Per robot and tick, its DetectChanges as answered (each robot's thread writes its own).
+  std::vector<std::vector<AnswerRow>> rows(options.robots);
+  for (int r = 0; r < options.robots; ++r) rows[r].resize(plans[r].size());
   const auto start = std::chrono::steady_clock::now();
   const auto period = std::chrono::duration<double>(1.0 / options.hz);
   std::vector<FleetRobot> fleet(options.robots);
@@ -381,6 +424,7 @@ int RunLoadBench(int argc, char** argv) {
           if (!status.ok()) {
             if (errors++ == 0) first_error = status.error_message();
           }
+          return ms;
         };
         auto insert = [&] {
           v1::InsertMapsRequest request;
@@ -391,22 +435,21 @@ int RunLoadBench(int argc, char** argv) {
         // Fleet robots ask first and store after: a sure answer then anchors
         // the map they store (lmdd derives it).
         if (!options.fleet) timed(insert);
-        timed([&] {
-          v1::DetectChangesRequest request;
-          request.set_collection(options.collection);
-          *request.mutable_map() = map.map();
-          request.set_top_k(5);
-          // The robot asks about stored maps other than the one it just sent.
-          request.add_exclude_map_ids(map.metadata().map_id());
-          if (options.fleet) AskAsTracked(robot_maps[r], t, &fleet[r], &request);
-          v1::DetectChangesResponse response;
-          const grpc::Status status = (*client)->DetectChanges(request, &response);
-          if (status.ok() && response.hits_size() > 0) top_hits[r][t] = response.hits(0).hit().map_id();
-          if (status.ok() && options.fleet) Track(robot_maps[r], t, response, &fleet[r]);
-          detects_ok += status.ok();
-          reduced += status.ok() && response.reduced_depth();
-          return status;
-        });
+        v1::DetectChangesRequest request;
+        request.set_collection(options.collection);
+        *request.mutable_map() = map.map();
+        request.set_top_k(5);
+        // The robot asks about stored maps other than the one it just sent.
+        request.add_exclude_map_ids(map.metadata().map_id());
+        if (options.fleet) AskAsTracked(robot_maps[r], t, &fleet[r], &request);
+        v1::DetectChangesResponse response;
+        grpc::Status status;
+        const double ms = timed([&] { return status = (*client)->DetectChanges(request, &response); });
+        if (status.ok()) {
+          rows[r][t] = ReadAnswer(robot_maps[r][t], request, response);
+          rows[r][t].latency_ms = ms;
+          if (options.fleet) Track(robot_maps[r], t, rows[r][t], &fleet[r]);
+        }
         if (options.fleet) timed(insert);
       }
     });
@@ -417,10 +460,11 @@ int RunLoadBench(int argc, char** argv) {
   // Localisation: does the top hit show the query's place (the product's
   // criterion, core/eval: half of the query's points within 0.3 m of the
   // hit's, in the world frame)? Among DetectChanges answered with a hit.
-  size_t answered = 0, localised = 0;
+  size_t answered = 0, localised = 0, detects_ok = 0, reduced = 0;
   for (int r = 0; r < options.robots; ++r) {
-    for (size_t t = 0; t < top_hits[r].size(); ++t) {
-      const LocalMap* hit = MapOfId(top_hits[r][t], base, robot_maps, options.first_robot);
+    for (size_t t = 0; t < rows[r].size(); ++t) {
+      detects_ok += rows[r][t].answered, reduced += rows[r][t].reduced_depth;
+      const LocalMap* hit = MapOfId(rows[r][t].top_hit, base, robot_maps, options.first_robot);
       if (hit == nullptr) continue;
       ++answered;
       localised += PlaceOverlap(robot_maps[r][t], *hit) >= 0.5;
@@ -437,11 +481,17 @@ int RunLoadBench(int argc, char** argv) {
               first_error.empty() ? "" : " first error: ", first_error.c_str());
   std::printf("localisation: the top hit shows the robot's place for %zu of %zu answered DetectChanges (%.3f)\n",
               localised, answered, place_at_1);
-  const double reduced_share =
-      detects_ok > 0 ? static_cast<double>(reduced.load()) / static_cast<double>(detects_ok.load()) : 0.0;
-  std::printf("lmdd was busy and answered %ld of %ld DetectChanges at its reduced depth (%.3f)\n", reduced.load(),
-              detects_ok.load(), reduced_share);
-  if (options.fleet) PrintFleet(fleet, base, robot_maps);
+  const double reduced_share = detects_ok > 0 ? static_cast<double>(reduced) / static_cast<double>(detects_ok) : 0.0;
+  std::printf("lmdd was busy and answered %zu of %zu DetectChanges at its reduced depth (%.3f)\n", reduced, detects_ok,
+              reduced_share);
+  if (options.fleet) PrintFleet(rows, base, robot_maps);
+  if (!options.answers.empty()) {
+    const Status written = WriteAnswers(options.answers, rows, base, robot_maps, options.first_robot);
+    if (!written.ok()) {
+      std::fprintf(stderr, "lmd-bench load: %s\n", written.message().c_str());
+      return 1;
+    }
+  }
   if (options.json) {
     std::printf("{\"robots\": %d, \"rps\": %.2f, \"p50_ms\": %.3f, \"p95_ms\": %.3f, \"p99_ms\": %.3f, \"errors\": %ld, "
                 "\"place_at_1\": %.4f, \"reduced_depth\": %.4f}\n",

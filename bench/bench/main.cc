@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
                 "       [--no-seed] [--first-robot N]      simulated robots inserting and detecting changes\n"
                 "       [--log CARMEN_LOG]                 (--log: robots driving a real log's maps again)\n"
                 "       [--mode fleet]                     robots tracking with priors from drifting odometry\n"
+                "       [--answers FILE]                   each DetectChanges as answered (TSV)\n"
                 "  fill --server HOST:PORT --collection C --maps N [--batch B] [--scans]\n"
                 "                                          store N simulated maps (scale runs)\n"
                 "  places --maps N [--queries Q] [--json]  localisation pipeline on N simulated maps (scale)\n"
