@@ -390,6 +390,17 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   }
   Conclude(query, judged, std::move(hits), second_pose, with_changes, &out, options.prior_changes_without_margin,
            SiteMaps{&source, &excluded});
+  // The robot says its map lies within the prior's radius. The search looks
+  // prior_margin_m beyond it (a match needs room to converge), but an answer
+  // out there contradicts the robot: a look-alike along a corridor, or a
+  // prior that understated its error; either way not sure. A sure answer may
+  // be off by max_pose_spread_m (what it promises), so that much beyond the
+  // radius still agrees.
+  const std::optional<Pose2>& at = out.verdict.collection_pose;
+  if (options.prior_first_stage && at &&
+      std::hypot(at->x - prior.pose.x, at->y - prior.pose.y) > prior.radius_m + options.confidence.max_pose_spread_m) {
+    out.verdict.sure = false;
+  }
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;
   return out;

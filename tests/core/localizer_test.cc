@@ -376,6 +376,32 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
   EXPECT_GE(right_loose, queries - 1) << "of " << queries;
 }
 
+// A prior 0.67 m off the truth: with a radius that covers it the answer is
+// the truth and usually sure; with a radius of 0.4 m (the search still looks
+// a prior_margin_m beyond it) the same answer contradicts what the robot
+// said and is never sure.
+TEST(LocalizerTest, AnAnswerBeyondThePriorsRadiusIsNeverSure) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions options = kOptions;
+  options.tight_prior_radius_m = 1.0;  // both priors tight: the same search
+  size_t queries = 0, sure_covered = 0, right_understated = 0;
+  for (size_t q = 7; q < DemoMaps().size(); q += 29) {
+    const LocalMap map = MovedDemoMap(q);
+    const LocalQuery query = PrepareLocalQuery(map, kOptions);
+    const Pose2 truth = map.truth.global_frame;
+    const Localization covered = LocalizeNear(query, collection, options, PriorOff(truth, {0.6, 0.3, 1.5}, 0.8, 3.0));
+    const Localization understated =
+        LocalizeNear(query, collection, options, PriorOff(truth, {0.6, 0.3, 1.5}, 0.4, 3.0));
+    ++queries;
+    sure_covered += covered.verdict.sure && SitePoseAt(covered, truth);
+    right_understated += SitePoseAt(understated, truth);
+    EXPECT_FALSE(understated.verdict.sure) << q;
+  }
+  EXPECT_GE(sure_covered, queries / 2) << "of " << queries;
+  EXPECT_GE(right_understated, queries - 1) << "of " << queries;
+}
+
 // A loose prior's nearest maps are each searched again away from the pose
 // found, and each map's better fit is kept: the best fit an answer finds can
 // only rise, and along the demo world's corridors it does for some queries
