@@ -190,6 +190,11 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // points (min_sure_points).
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
+  // Nor one whose map does not pin its pose as closely as a sure answer promises.
+  if (out->verdict.sure && options.confidence.min_slide_margin > 0 &&
+      SlideMargin(query, hits[0], options, options.confidence) < options.confidence.min_slide_margin) {
+    out->verdict.sure = false;
+  }
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
 
@@ -241,6 +246,22 @@ double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const L
   const ScanMatch second = SecondBestMatch(query.match, *best.db, best.pose, options.self_rival_radius_m,
                                            options.self_rival_angle_deg, match);
   return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
+}
+
+double SlideMargin(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
+                   const ConfidenceOptions& verdict) {
+  const std::vector<Point2>& points = query.match.points;
+  if (points.empty() || !best.db) return 0.0;
+  const double close_m = options.match.inlier_radius_m / 3;
+  auto close_at = [&](const Pose2& pose) {
+    return static_cast<double>(MeasureOverlap(points, *best.db, pose, close_m).inliers);
+  };
+  double kept = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * M_PI / 4, d = verdict.max_pose_spread_m;
+    kept = std::max(kept, close_at({best.pose.x + d * std::cos(a), best.pose.y + d * std::sin(a), best.pose.theta}));
+  }
+  return (close_at(best.pose) - kept) / static_cast<double>(points.size());
 }
 
 std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const ConfidenceOptions& options) {

@@ -42,6 +42,16 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
 double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
                       const ConfidenceOptions& verdict);
 
+// How firmly `best`'s map pins the query's pose at the precision a sure
+// answer promises (verdict.max_pose_spread_m): the share of the query's
+// points within a third of inlier_radius_m of the map's at the pose, less
+// the most of them that stay that close with the pose slid
+// max_pose_spread_m in any of eight directions. A corridor whose walls run
+// on past the query keeps nearly all of them sliding along it (about 0); a
+// room loses at least its cross walls' points to any slide.
+double SlideMargin(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
+                   const ConfidenceOptions& verdict);
+
 // The query's site pose as the maps that show its place measure it: each
 // agreeing anchored hit that fits (options.min_score; the best hit always)
 // is one measurement, through its own match and its own anchor. The mean of

@@ -516,12 +516,16 @@ TEST(LocalizerTest, ALoosePriorRunsTheFirstStageOnlyWhereItsNearestMapsLeaveTheA
   for (size_t q = 7; q < DemoMaps().size(); q += 29) {
     const LocalMap map = MovedDemoMap(q);
     const Pose2 truth = map.truth.global_frame;
-    const Localization l = LocalizeNear(PrepareLocalQuery(map, kOptions), collection, kOptions,
-                                        PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0));
+    const LocalQuery query = PrepareLocalQuery(map, kOptions);
+    const Localization l = LocalizeNear(query, collection, kOptions, PriorOff(truth, {1.5, -1.0, 12.0}, 3.5, 20.0));
     ++queries;
     if (l.stats.search.lookups != 0) continue;
     ++skipped;
-    EXPECT_TRUE(l.verdict.sure) << q;
+    // Sure, unless its map does not pin the pose to 0.2 m (checked after).
+    ASSERT_FALSE(l.hits.empty()) << q;
+    EXPECT_TRUE(l.verdict.sure || localize_internal::SlideMargin(query, l.hits[0], kOptions, kOptions.confidence) <
+                                      kOptions.confidence.min_slide_margin)
+        << q;
     skipped_right += SitePoseAt(l, truth);
   }
   EXPECT_GE(skipped, queries / 2) << "of " << queries;
@@ -747,6 +751,41 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
     localize_internal::SortHits(&hits, options);
     EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
+}
+
+// Two parallel walls 2 m apart, from x0 to x1, a point every 5 cm.
+LocalMap CorridorWalls(double x0, double x1) {
+  LocalMap corridor;
+  for (double x = x0; x <= x1 + 1e-9; x += 0.05) corridor.points.push_back({x, -1.0}), corridor.points.push_back({x, 1.0});
+  return corridor;
+}
+
+// A room pins a pose: any 0.2 m slide moves its cross walls' points away.
+// A corridor whose walls run on past the query's does not: slid along it,
+// every point stays as close. And a sure verdict needs the pose pinned.
+TEST(LocalizerTest, OnlyAMapThatPinsThePoseTo20CmMakesItSure) {
+  LocalizedHit hit;
+  const LocalQuery room = PrepareLocalQuery(RoomWalls(6.0, 4.0), kOptions);
+  hit.db = PreparePlace(RoomWalls(6.0, 4.0), kOptions).map;
+  // A 6 x 4 m room slid 0.2 m along x keeps its 6 m walls (0.6 of its points).
+  EXPECT_NEAR(localize_internal::SlideMargin(room, hit, kOptions, kOptions.confidence), 0.4, 0.1);
+  const LocalQuery corridor = PrepareLocalQuery(CorridorWalls(-2.5, 2.5), kOptions);
+  hit.db = PreparePlace(CorridorWalls(-10.0, 10.0), kOptions).map;
+  EXPECT_LT(localize_internal::SlideMargin(corridor, hit, kOptions, kOptions.confidence), 0.02);
+
+
+  // Demo queries: some sure by default, none when no slide can cost enough.
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);
+  LocalizeOptions unpinnable = kOptions;
+  unpinnable.confidence.min_slide_margin = 1.01;
+  size_t sure = 0;
+  for (size_t q = 5; q < DemoMaps().size(); q += 40) {
+    const LocalQuery query = PrepareLocalQuery(MovedDemoMap(q), kOptions);
+    sure += Localize(query, collection, kOptions).verdict.sure;
+    EXPECT_FALSE(Localize(query, collection, unpinnable).verdict.sure) << q;
+  }
+  EXPECT_GT(sure, 0u);
 }
 
 TEST(LocalizerTest, ExcludedMapsAreNeverHits) {
