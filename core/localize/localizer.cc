@@ -252,16 +252,31 @@ double SlideMargin(const LocalQuery& query, const LocalizedHit& best, const Loca
                    const ConfidenceOptions& verdict) {
   const std::vector<Point2>& points = query.match.points;
   if (points.empty() || !best.db) return 0.0;
-  const double close_m = options.match.inlier_radius_m / 3;
-  auto close_at = [&](const Pose2& pose) {
-    return static_cast<double>(MeasureOverlap(points, *best.db, pose, close_m).inliers);
-  };
-  double kept = 0.0;
-  for (int k = 0; k < 8; ++k) {
-    const double a = k * M_PI / 4, d = verdict.max_pose_spread_m;
-    kept = std::max(kept, close_at({best.pose.x + d * std::cos(a), best.pose.y + d * std::sin(a), best.pose.theta}));
+  const PreparedMap& db = *best.db;
+  const double close_m = options.match.inlier_radius_m / 3, slide_m = verdict.max_pose_spread_m;
+  // The query's points in the map's frame; a point farther than close_m +
+  // slide_m from the map's cannot come within close_m by a slide, so only
+  // the others are slid (all of them where the buckets do not reach that far).
+  const double reach_m = close_m + slide_m;
+  const bool prune = reach_m <= db.options.neighbour_cell_m;
+  const double c = std::cos(best.pose.theta), s = std::sin(best.pose.theta);
+  std::vector<Point2> near;
+  size_t close = 0;
+  for (const Point2& p : points) {
+    const Point2 q{best.pose.x + c * p.x - s * p.y, best.pose.y + s * p.x + c * p.y};
+    double d2 = 0.0;
+    const bool within = NearestPoint(db, q, prune ? reach_m : close_m, &d2) >= 0;
+    if (within && d2 <= close_m * close_m) ++close;
+    if (within || !prune) near.push_back(q);
   }
-  return (close_at(best.pose) - kept) / static_cast<double>(points.size());
+  size_t kept = 0;
+  for (int k = 0; k < 8; ++k) {
+    const double dx = slide_m * std::cos(k * M_PI / 4), dy = slide_m * std::sin(k * M_PI / 4);
+    size_t stays = 0;
+    for (const Point2& q : near) stays += NearestPoint(db, {q.x + dx, q.y + dy}, close_m) >= 0;
+    kept = std::max(kept, stays);
+  }
+  return (static_cast<double>(close) - static_cast<double>(kept)) / static_cast<double>(points.size());
 }
 
 std::optional<Pose2> FusedSitePose(const std::vector<LocalizedHit>& hits, const ConfidenceOptions& options) {
