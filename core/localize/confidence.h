@@ -105,6 +105,10 @@ struct Verdict {
   // Anchored hits: how far the median pose of the other agreeing maps that
   // fit lies from the best hit's (0: fewer than two of them).
   double pose_spread_m = 0.0, pose_spread_deg = 0.0;
+  // How firmly the best map pins the pose (SlideMargin, verification.h;
+  // sure needs min_slide_margin): looked for only where it decides, in an
+  // answer otherwise sure (0 elsewhere).
+  double slide_margin = 0.0;
   bool prior_used = false;   // a prior query (prior.h)
   bool prior_failed = false; // ... and no map near the prior matched
   bool fell_back_to_global = false;  // ... so a global query answered (lmdd, on request)

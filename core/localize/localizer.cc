@@ -191,9 +191,9 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
   // Nor one whose map does not pin its pose as closely as a sure answer promises.
-  if (out->verdict.sure && options.confidence.min_slide_margin > 0 &&
-      SlideMargin(query, hits[0], options, options.confidence) < options.confidence.min_slide_margin) {
-    out->verdict.sure = false;
+  if (out->verdict.sure && options.confidence.min_slide_margin > 0) {
+    out->verdict.slide_margin = SlideMargin(query, hits[0], options, options.confidence);
+    out->verdict.sure = out->verdict.slide_margin >= options.confidence.min_slide_margin;
   }
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);

@@ -135,8 +135,9 @@ TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {
     EXPECT_TRUE(response.localization().prior_used());
     EXPECT_FALSE(response.localization().prior_failed()) << i;
     ASSERT_GT(response.hits_size(), 0);
-    if (response.localization().localized()) {  // a sure answer must be right
+    if (response.localization().localized()) {  // a sure answer must be right, and its pose pinned
       EXPECT_LT(Distance(response.hits(0).collection_pose(), truth), 0.2) << i;
+      EXPECT_GE(response.localization().slide_margin(), 0.1) << i;
       ++localized;
     }
   }
