@@ -89,7 +89,8 @@ struct ConfidenceOptions {
   // and change masks the same. 0.2 (min_margin's value) gave tracking 3
   // wrong, global 4, but sure 0.395 and 0.307, and lmd-bench load --mode
   // fleet (200 robots) sure fixes 0.948 -> 0.583, right fixes 0.999 ->
-  // 0.986, lmdd CPU +59 %; 0.1 there: 0.845, 0.997, +14 %.
+  // 0.986, lmdd CPU +59 %; 0.1 there: 0.845, 0.997, +7 and +14 % (two
+  // pairs of runs).
   double min_slide_margin = 0.1;
 };
 

@@ -773,7 +773,6 @@ TEST(LocalizerTest, OnlyAMapThatPinsThePoseTo20CmMakesItSure) {
   hit.db = PreparePlace(CorridorWalls(-10.0, 10.0), kOptions).map;
   EXPECT_LT(localize_internal::SlideMargin(corridor, hit, kOptions, kOptions.confidence), 0.02);
 
-
   // Demo queries: some sure by default, none when no slide can cost enough.
   MemoryCollection collection;
   Store(EveryThirdMap(), &collection);
