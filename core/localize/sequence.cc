@@ -39,7 +39,9 @@ SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<Sequen
   // map about its own origin, which moves its centroid, the search's pivot,
   // too).
   LocalizeOptions near_options = options;
-  near_options.self_rival_radius_m = 0;  // a map's fit is asked here, not whether it is sure
+  // A map's fit is asked here, not whether it is sure: no rival pose, no slide.
+  near_options.self_rival_radius_m = 0;
+  near_options.confidence.min_slide_margin = 0;
   near_options.prior_first_stage = false;  // the hypotheses came from it
   near_options.prior_second_pose = false;  // a hypothesis names the pose; its window is the drift's
   near_options.prior_weak_fits = false;
