@@ -12,6 +12,25 @@ v1::Pose2 ToProto(const Pose2& pose) {
   return out;
 }
 
+v1::PoseCovariance ToProto(const Eigen::Matrix3d& covariance) {
+  v1::PoseCovariance out;
+  out.set_xx(covariance(0, 0));
+  out.set_xy(covariance(0, 1));
+  out.set_xt(covariance(0, 2));
+  out.set_yy(covariance(1, 1));
+  out.set_yt(covariance(1, 2));
+  out.set_tt(covariance(2, 2));
+  return out;
+}
+
+Eigen::Matrix3d FromProto(const v1::PoseCovariance& covariance) {
+  Eigen::Matrix3d out;
+  out << covariance.xx(), covariance.xy(), covariance.xt(),  //
+      covariance.xy(), covariance.yy(), covariance.yt(),     //
+      covariance.xt(), covariance.yt(), covariance.tt();
+  return out;
+}
+
 LocalMap FromProto(const v1::LocalMap& map) {
   LocalMap out;
   out.points.resize(map.x_size());

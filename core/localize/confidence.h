@@ -19,6 +19,8 @@
 #include <optional>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "core/align/prepared_map.h"
 #include "core/types.h"
 
@@ -123,6 +125,12 @@ struct Verdict {
   // it (LocalizeOptions::fuse_site_pose).
   std::optional<Pose2> collection_pose;
   size_t collection_pose_hit = 0;
+  // How closely the best hit's fit determines its pose (PoseCovariance,
+  // icp.h; x, y, theta), in its map's frame, and the same turned into the
+  // collection's frame where there is a collection_pose (anchors taken as
+  // exact). Zero without hits.
+  Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Zero();
+  std::optional<Eigen::Matrix3d> collection_pose_covariance;
 };
 
 // A verified hit as the verdict sees it.

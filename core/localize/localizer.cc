@@ -222,6 +222,19 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
       break;
     }
   }
+  if (!hits.empty() && hits[0].db) {
+    const LocalizedHit& best = hits[0];
+    PoseCovarianceOptions covariance = options.pose_covariance;
+    covariance.icp = options.refine;
+    out->verdict.pose_covariance = PoseCovariance(query.match.points, *best.db, best.pose, covariance);
+    if (out->verdict.collection_pose) {
+      // The hit's frame turned into the collection's.
+      const double turn = out->verdict.collection_pose->theta - best.pose.theta;
+      Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+      rotation.topLeftCorner<2, 2>() << std::cos(turn), -std::sin(turn), std::sin(turn), std::cos(turn);
+      out->verdict.collection_pose_covariance = rotation * out->verdict.pose_covariance * rotation.transpose();
+    }
+  }
   out->hits = std::move(hits);
 }
 

@@ -117,6 +117,9 @@ struct LocalizeOptions {
     icp.converged_m = 1e-4;
     return icp;
   }();
+  // The best hit's pose covariance (Verdict::pose_covariance), from the
+  // correspondences `refine` finds (its own icp options are not read).
+  PoseCovarianceOptions pose_covariance;
   // The best guess-free alignment of the best hit's map at least
   // self_rival_radius_m (query centroid) or self_rival_angle_deg away from
   // its pose is a rival for the verdict: the same map may fit the query at

@@ -122,6 +122,18 @@ TEST_F(AnchoredQueryTest, APoseHintAnchorsTheMapAndHitsCarryTheCollectionPose) {
   ASSERT_TRUE(response.localization().has_collection_pose());
   EXPECT_LT(Distance(response.localization().collection_pose(), FromProto(response.hits(0).collection_pose())), 1e-9);
   EXPECT_EQ(response.localization().collection_pose_map_id(), response.hits(0).map_id());
+  // With the pose, how closely it is known: in the hit's frame and the
+  // collection's, turned (the same variances in x and y together, the same
+  // in heading), and within centimetres where the demo's rooms pin it.
+  ASSERT_TRUE(response.localization().has_pose_covariance());
+  ASSERT_TRUE(response.localization().has_collection_pose_covariance());
+  const v1::PoseCovariance& hit = response.localization().pose_covariance();
+  const v1::PoseCovariance& site = response.localization().collection_pose_covariance();
+  EXPECT_GT(hit.xx(), 0.0);
+  EXPECT_GT(hit.tt(), 0.0);
+  EXPECT_NEAR(hit.xx() + hit.yy(), site.xx() + site.yy(), 1e-12);
+  EXPECT_DOUBLE_EQ(hit.tt(), site.tt());
+  EXPECT_LT(std::sqrt(hit.xx() + hit.yy()), 0.2);
 }
 
 TEST_F(AnchoredQueryTest, APriorNearTheTruthLocalisesInTheCollectionsFrame) {

@@ -1,0 +1,102 @@
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "core/align/icp.h"
+#include "core/align/prepared_map.h"
+
+namespace lmd {
+namespace {
+
+// Points every 5 cm along the segment from a to b.
+void AddWall(const Point2& a, const Point2& b, std::vector<Point2>* points) {
+  const double length = std::hypot(b.x - a.x, b.y - a.y);
+  const int steps = static_cast<int>(length / 0.05);
+  for (int i = 0; i <= steps; ++i) {
+    const double t = static_cast<double>(i) / steps;
+    points->push_back({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)});
+  }
+}
+
+// A corridor 2 m wide along x, `half_length` m either way.
+std::vector<Point2> Corridor(double half_length) {
+  std::vector<Point2> points;
+  AddWall({-half_length, -1}, {half_length, -1}, &points);
+  AddWall({-half_length, 1}, {half_length, 1}, &points);
+  return points;
+}
+
+// A closed 4 m x 3 m room.
+std::vector<Point2> Room() {
+  std::vector<Point2> points;
+  AddWall({-2, -1.5}, {2, -1.5}, &points);
+  AddWall({2, -1.5}, {2, 1.5}, &points);
+  AddWall({2, 1.5}, {-2, 1.5}, &points);
+  AddWall({-2, 1.5}, {-2, -1.5}, &points);
+  return points;
+}
+
+std::vector<Point2> WithNoise(std::vector<Point2> points, double sigma_m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma_m);
+  for (Point2& p : points) p.x += noise(rng), p.y += noise(rng);
+  return points;
+}
+
+double Sigma(const Eigen::Matrix3d& covariance, int axis) { return std::sqrt(covariance(axis, axis)); }
+
+TEST(PoseCovarianceTest, ACorridorLeavesItsLengthUnknownAndItsWidthKnown) {
+  const PreparedMap db = PreparePoints(Corridor(8.0));
+  const std::vector<Point2> query = WithNoise(Corridor(2.0), 0.01, 1);
+  const PoseCovarianceOptions options;
+  const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, options);
+  // Along the corridor nothing constrains the pose but the search's reach.
+  EXPECT_GT(Sigma(c, 0), 0.9 * options.max_sigma_m);
+  EXPECT_LE(Sigma(c, 0), std::hypot(options.max_sigma_m, options.floor_sigma_m) + 1e-9);
+  // Across it and in heading, the walls do: a few centimetres and tenths of a degree.
+  EXPECT_LT(Sigma(c, 1), 0.05);
+  EXPECT_LT(Sigma(c, 2), 1.0 * M_PI / 180);
+}
+
+TEST(PoseCovarianceTest, AClosedRoomPinsEveryDirection) {
+  const PreparedMap db = PreparePoints(Room());
+  const std::vector<Point2> query = WithNoise(Room(), 0.01, 2);
+  const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0});
+  EXPECT_LT(Sigma(c, 0), 0.05);
+  EXPECT_LT(Sigma(c, 1), 0.05);
+  EXPECT_LT(Sigma(c, 2), 1.0 * M_PI / 180);
+  // Symmetric and positive definite: a covariance a filter can fuse.
+  EXPECT_TRUE(c.isApprox(c.transpose()));
+  EXPECT_EQ(Eigen::LLT<Eigen::Matrix3d>(c).info(), Eigen::Success);
+}
+
+TEST(PoseCovarianceTest, NoisierPointsGiveALargerCovarianceAboveTheFloor) {
+  const PreparedMap db = PreparePoints(Room());
+  PoseCovarianceOptions no_floor;
+  no_floor.floor_sigma_m = no_floor.floor_sigma_rad = 0.0;
+  const Eigen::Matrix3d clean = PoseCovariance(WithNoise(Room(), 0.01, 3), db, {0, 0, 0}, no_floor);
+  const Eigen::Matrix3d noisy = PoseCovariance(WithNoise(Room(), 0.05, 3), db, {0, 0, 0}, no_floor);
+  for (int axis = 0; axis < 3; ++axis) EXPECT_GT(Sigma(noisy, axis), 2 * Sigma(clean, axis)) << axis;
+  // The floor is what two maps of one place differ by, however well they fit.
+  const Eigen::Matrix3d floored = PoseCovariance(WithNoise(Room(), 0.01, 3), db, {0, 0, 0});
+  EXPECT_GE(Sigma(floored, 0), PoseCovarianceOptions().floor_sigma_m);
+  EXPECT_GE(Sigma(floored, 2), PoseCovarianceOptions().floor_sigma_rad);
+}
+
+TEST(PoseCovarianceTest, NothingToFitLeavesTheSearchsReach) {
+  const PoseCovarianceOptions options;
+  const PreparedMap db = PreparePoints(Room());
+  // No query points, or none near the map's: the bound alone.
+  for (const std::vector<Point2>& query : {std::vector<Point2>{}, std::vector<Point2>{{40, 40}, {41, 40}, {40, 41}}}) {
+    const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, options);
+    EXPECT_DOUBLE_EQ(Sigma(c, 0), options.max_sigma_m);
+    EXPECT_DOUBLE_EQ(Sigma(c, 2), options.max_sigma_rad);
+    EXPECT_TRUE(c.allFinite());
+  }
+}
+
+}  // namespace
+}  // namespace lmd
