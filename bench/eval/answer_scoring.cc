@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <Eigen/Dense>
+
 #include "core/align/scan_match.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localmap/pose_ops.h"
@@ -11,6 +13,9 @@
 namespace lmd::eval {
 
 namespace {
+
+// Quantiles of the chi-square distribution with 3 degrees of freedom (x, y, theta).
+constexpr double kChiSquare3Dof50 = 2.366, kChiSquare3Dof95 = 7.815;
 
 // The part of verification's score (core/localize) that the query's points
 // give: their overlap less their share in the map's free space.
@@ -71,7 +76,13 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
   }
   if (o.first_place_hit == 0) {
     o.pose_known = true;
-    PoseError(answer.hits[0].pose, d.TruePose(q.map, answer.hits[0].db), &o.pose_err_m, &o.pose_err_deg);
+    const Pose2 truth = d.TruePose(q.map, answer.hits[0].db);
+    PoseError(answer.hits[0].pose, truth, &o.pose_err_m, &o.pose_err_deg);
+    if (answer.pose_covariance) {
+      const Eigen::Vector3d e(answer.hits[0].pose.x - truth.x, answer.hits[0].pose.y - truth.y,
+                              std::remainder(answer.hits[0].pose.theta - truth.theta, 2 * M_PI));
+      o.pose_d2 = e.dot(answer.pose_covariance->ldlt().solve(e));
+    }
     if (answer.site_pose) {
       o.site_known = true;
       PoseError(*answer.site_pose, d.maps[q.map].truth.global_frame, &o.site_err_m, &o.site_err_deg);
@@ -103,7 +114,7 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
 AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   AnswerSummary s;
   s.queries = outcomes.size();
-  size_t at1 = 0, at5 = 0, change_ok = 0;
+  size_t at1 = 0, at5 = 0, change_ok = 0, within_50 = 0, within_95 = 0, sure_within_95 = 0;
   std::vector<double> err_m, err_deg, site_m, site_deg, cpu, wall;
   for (const AnswerOutcome& o : outcomes) {
     if (o.place_counted) {
@@ -113,6 +124,13 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
     }
     if (o.pose_known) err_m.push_back(o.pose_err_m), err_deg.push_back(o.pose_err_deg);
     if (o.site_known) site_m.push_back(o.site_err_m), site_deg.push_back(o.site_err_deg);
+    if (o.pose_d2 >= 0) {
+      ++s.covariance_count;
+      within_50 += o.pose_d2 <= kChiSquare3Dof50;
+      within_95 += o.pose_d2 <= kChiSquare3Dof95;
+      s.covariance_sure += o.localized;
+      sure_within_95 += o.localized && o.pose_d2 <= kChiSquare3Dof95;
+    }
     s.localized += o.localized;
     s.localized_wrong += o.localized && !o.localized_right;
     s.wrong_pose_fits_better += o.wrong_pose_fits_better;
@@ -136,6 +154,8 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   s.site_count = site_m.size();
   s.site_err_m_median = Quantile(site_m, 0.5), s.site_err_m_p90 = Quantile(site_m, 0.9);
   s.site_err_deg_median = Quantile(site_deg, 0.5);
+  s.within_50 = rate(within_50, s.covariance_count), s.within_95 = rate(within_95, s.covariance_count);
+  s.sure_within_95 = rate(sure_within_95, s.covariance_sure);
   s.localized_share = rate(s.localized, s.queries);
   s.localized_precision = s.localized ? 1.0 - rate(s.localized_wrong, s.localized) : 1.0;
   s.change_success_at_1 = rate(change_ok, s.change_tasks);
@@ -166,6 +186,8 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
     m.site_count += s.site_count;
     m.site_err_m_median += s.site_err_m_median / n, m.site_err_m_p90 += s.site_err_m_p90 / n;
     m.site_err_deg_median += s.site_err_deg_median / n;
+    m.covariance_count += s.covariance_count, m.covariance_sure += s.covariance_sure;
+    m.within_50 += s.within_50 / n, m.within_95 += s.within_95 / n, m.sure_within_95 += s.sure_within_95 / n;
     m.localized_share += s.localized_share / n, m.localized_precision += s.localized_precision / n;
     m.change_success_at_1 += s.change_success_at_1 / n, m.false_mask_share += s.false_mask_share / n;
     m.cpu_ms_p50 += s.cpu_ms_p50 / n, m.cpu_ms_p99 += s.cpu_ms_p99 / n, m.cpu_ms_mean += s.cpu_ms_mean / n;
@@ -181,6 +203,8 @@ std::string SummaryJson(const AnswerSummary& s) {
                 "\"pose_count\": %zu, \"pose_err_m_median\": %.4f, \"pose_err_m_p90\": %.4f, "
                 "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"site_count\": %zu, "
                 "\"site_err_m_median\": %.4f, \"site_err_m_p90\": %.4f, \"site_err_deg_median\": %.4f, "
+                "\"covariance_count\": %zu, \"within_50\": %.4f, \"within_95\": %.4f, \"covariance_sure\": %zu, "
+                "\"sure_within_95\": %.4f, "
                 "\"localized\": %zu, "
                 "\"localized_share\": %.4f, \"localized_wrong\": %zu, \"localized_precision\": %.4f, "
                 "\"wrong_pose_fits_better\": %zu, \"unsure_right\": %zu, \"unsure_right_rival\": "
@@ -190,7 +214,9 @@ std::string SummaryJson(const AnswerSummary& s) {
                 "\"wall_ms_p50\": %.3f, \"wall_ms_p99\": %.3f}",
                 s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
                 s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.site_count, s.site_err_m_median,
-                s.site_err_m_p90, s.site_err_deg_median, s.localized, s.localized_share,
+                s.site_err_m_p90, s.site_err_deg_median, s.covariance_count, s.within_50, s.within_95, s.covariance_sure,
+                s.sure_within_95, s.localized,
+                s.localized_share,
                 s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
                 s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
                 s.unsure_right_rival[4], s.change_tasks, s.change_success_at_1, s.masks, s.false_masks,

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "bench/eval/eval_dataset.h"
 #include "core/types.h"
 
@@ -57,6 +59,7 @@ struct Answer {
   double confidence = 0.0;
   double rival_score = 0.0;  // the verdict's best rival (0: none)
   std::optional<Pose2> site_pose;  // the query's own frame in the collection's (anchored collections)
+  std::optional<Eigen::Matrix3d> pose_covariance;  // of hits[0].pose (Localization.pose_covariance)
   std::vector<Mask> masks;  // best first
   double cpu_ms = 0.0;      // lmdd's (or the pipeline's) CPU on this query
   double wall_ms = 0.0;
@@ -72,6 +75,11 @@ struct AnswerOutcome {
   bool site_known = false;
   double site_err_m = 0.0, site_err_deg = 0.0;
   bool top_right = false;        // the top hit shows the place, its pose within kSurePose*
+  // Where the top hit shows the place and the answer has a pose covariance:
+  // the squared Mahalanobis distance of its pose error (x, y, theta) under
+  // it; -1 elsewhere. A calibrated covariance puts it below the chi-square
+  // (3 dof) quantile q for a share q of the answers.
+  double pose_d2 = -1.0;
   bool localized = false;
   bool localized_right = false;  // localized and top_right
   // Sure and wrong by a near miss (the right place, the pose beyond
@@ -109,6 +117,10 @@ struct AnswerSummary {
   size_t pose_count = 0;
   double pose_err_m_median = 0.0, pose_err_m_p90 = 0.0, pose_err_deg_median = 0.0, pose_err_deg_p90 = 0.0;
   size_t site_count = 0;  // AnswerOutcome::site_known
+  // Of the answers with a pose_d2, the shares within the pose covariance's
+  // 50 % and 95 % ellipsoids; of the sure ones among them, within 95 %.
+  size_t covariance_count = 0, covariance_sure = 0;
+  double within_50 = 0.0, within_95 = 0.0, sure_within_95 = 0.0;
   double site_err_m_median = 0.0, site_err_m_p90 = 0.0, site_err_deg_median = 0.0;
   double localized_share = 0.0;      // of all queries
   double localized_precision = 1.0;  // right among localized answers (1 when none)

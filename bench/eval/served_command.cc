@@ -106,15 +106,20 @@ Answer::Hit ToAnswerHit(const Hit& hit, const std::unordered_map<std::string, si
 
 Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std::string, size_t>& index_of) {
   Answer a;
+  bool first_known = false;  // the response's first hit is a.hits[0]
   for (const v1::MapHit& hit : r.hits()) {
     bool known = false;
     const Answer::Hit h = ToAnswerHit(hit, index_of, &known);
     if (known) a.hits.push_back(h);
+    if (&hit == &r.hits(0)) first_known = known;
   }
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
   if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
+  if (first_known && r.localization().has_pose_covariance()) {
+    a.pose_covariance = FromProto(r.localization().pose_covariance());
+  }
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -122,9 +127,11 @@ Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std:
 Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map<std::string, size_t>& index_of) {
   Answer a;
   std::vector<std::pair<uint32_t, Answer::Mask>> masks;  // (rank, mask)
+  bool first_known = false;  // the response's first hit is a.hits[0]
   for (const v1::ChangeHit& change_hit : r.hits()) {
     bool known = false;
     const Answer::Hit h = ToAnswerHit(change_hit.hit(), index_of, &known);
+    if (&change_hit == &r.hits(0)) first_known = known;
     if (!known) continue;
     a.hits.push_back(h);
     for (const v1::ChangeMask& m : change_hit.masks()) {
@@ -141,6 +148,9 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
   if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
+  if (first_known && r.localization().has_pose_covariance()) {
+    a.pose_covariance = FromProto(r.localization().pose_covariance());
+  }
   a.cpu_ms = r.server_cpu_ms();
   return a;
 }
@@ -281,14 +291,14 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     if (options.changes) changed.push_back(r.changed);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f\n",
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f,%.3f\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
                   r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms,
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
                   r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str(),
-                  r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0);
+                  r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0, r.still.pose_d2);
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);
