@@ -127,6 +127,15 @@ void PrintLocalization(const v1::Localization& l, bool json) {
     std::printf("site pose (%.2f m, %.2f m, %.1f deg), through %s\n", p.x(), p.y(), p.theta() * 180 / M_PI,
                 l.collection_pose_map_id().c_str());
   }
+  if (l.has_pose_covariance()) {
+    // The position's standard deviation along its least known direction
+    // (the larger eigenvalue of the x-y block), and the heading's.
+    const v1::PoseCovariance& c = l.pose_covariance();
+    const double half_sum = (c.xx() + c.yy()) / 2, half_diff = (c.xx() - c.yy()) / 2;
+    const double worst = std::sqrt(half_sum + std::hypot(half_diff, c.xy()));
+    std::printf("the first hit's pose is known to %.3f m (its least known direction) and %.2f deg (1 sigma)\n", worst,
+                std::sqrt(c.tt()) * 180 / M_PI);
+  }
 }
 
 constexpr const char* kReducedDepthNote =

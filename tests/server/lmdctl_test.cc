@@ -338,6 +338,10 @@ TEST_F(LmdctlLogTest, PriorsAndSequencesReachLmddAndItsVerdictIsPrinted) {
   ASSERT_EQ(near.exit_code, 0) << near.err;
   EXPECT_NE(near.out.find("\"prior_used\":true,\"prior_failed\":false"), std::string::npos) << near.out;
   EXPECT_NE(near.out.find("\"map_id\":\"robot-12\""), std::string::npos) << near.out;
+  EXPECT_NE(near.out.find("\"pose_covariance\":{\"xx\":"), std::string::npos) << near.out;
+  CliRun shown = RunLmdctl(base + "query --collection fleet --log " + log + " --map 12" + prior(0.8), dir_);
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  EXPECT_NE(shown.out.find("the first hit's pose is known to "), std::string::npos) << shown.out;
   CliRun far = RunLmdctl(base + "query --collection fleet --log " + log + " --map 12" + prior(200), dir_);
   ASSERT_EQ(far.exit_code, 0) << far.err;
   EXPECT_NE(far.out.find("the prior failed"), std::string::npos) << far.out;
