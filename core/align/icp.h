@@ -1,4 +1,5 @@
-// Local refinement of a query-to-db pose (ICP) and the overlap score that
+// Local refinement of a query-to-db pose (ICP), how closely that fit
+// determines the pose (its covariance), and the overlap score that
 // verification ranks by. Point-to-line residuals where the db point has a
 // normal (walls), point-to-point elsewhere, plus a small point-to-point term
 // everywhere so corridors (one normal direction) stay well-posed; Huber
