@@ -117,11 +117,11 @@ struct AnswerSummary {
   size_t pose_count = 0;
   double pose_err_m_median = 0.0, pose_err_m_p90 = 0.0, pose_err_deg_median = 0.0, pose_err_deg_p90 = 0.0;
   size_t site_count = 0;  // AnswerOutcome::site_known
+  double site_err_m_median = 0.0, site_err_m_p90 = 0.0, site_err_deg_median = 0.0;
   // Of the answers with a pose_d2, the shares within the pose covariance's
   // 50 % and 95 % ellipsoids; of the sure ones among them, within 95 %.
   size_t covariance_count = 0, covariance_sure = 0;
   double within_50 = 0.0, within_95 = 0.0, sure_within_95 = 0.0;
-  double site_err_m_median = 0.0, site_err_m_p90 = 0.0, site_err_deg_median = 0.0;
   double localized_share = 0.0;      // of all queries
   double localized_precision = 1.0;  // right among localized answers (1 when none)
   size_t localized = 0, localized_wrong = 0;
