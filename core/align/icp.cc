@@ -88,11 +88,11 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
 }
 
 Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
-                               const PoseCovarianceOptions& options) {
+                               const IcpOptions& icp, const PoseCovarianceOptions& options) {
   const Eigen::Vector3d bound(options.max_sigma_m, options.max_sigma_m, options.max_sigma_rad);
   Eigen::Matrix3d covariance = bound.cwiseProduct(bound).asDiagonal();
   if (query_points.empty() || db.empty()) return covariance;
-  IcpOptions fit = options.icp;
+  IcpOptions fit = icp;
   fit.point_to_point_weight = 0.0;  // it pins a wall's points along the wall: no evidence of where they lie
   const NormalEquations e = Accumulate(query_points, db, pose, fit);
   if (e.pairs < 3 || e.line_weight <= 0) return covariance;

@@ -42,7 +42,6 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
 // 0.956; 2 gave 0.949). Held out: 0.936, edmonton's 0.83 the least (its
 // truth is the loosest: 7 cm median error of right top hits).
 struct PoseCovarianceOptions {
-  IcpOptions icp;  // correspondences and Huber weights as ICP finds them
   // The formal covariance of a least-squares fit (residual variance times
   // the inverse information) takes every point for an independent
   // measurement; a map's points are not (a wall is off as a whole), so the
@@ -59,12 +58,13 @@ struct PoseCovarianceOptions {
 };
 
 // Covariance of `pose` (query own frame in db own frame; x, y in m, theta in
-// rad) from the point-to-line fit there: a direction the map's walls do not
+// rad) from the point-to-line fit there, its correspondences and Huber
+// weights as ICP with `icp` finds them: a direction the map's walls do not
 // constrain (along a corridor) keeps a large variance, one many walls cross
 // a small one. The point-to-point terms ICP adds on walls are left out:
 // they pin a point along its wall by correspondences, not by evidence.
 Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
-                               const PoseCovarianceOptions& options = {});
+                               const IcpOptions& icp = {}, const PoseCovarianceOptions& options = {});
 
 struct Overlap {
   double fraction = 0.0;  // inliers / query points; 0 for an empty query or db

@@ -224,9 +224,8 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   }
   if (!hits.empty() && hits[0].db) {
     const LocalizedHit& best = hits[0];
-    PoseCovarianceOptions covariance = options.pose_covariance;
-    covariance.icp = options.refine;
-    out->verdict.pose_covariance = PoseCovariance(query.match.points, *best.db, best.pose, covariance);
+    out->verdict.pose_covariance =
+        PoseCovariance(query.match.points, *best.db, best.pose, options.refine, options.pose_covariance);
     if (out->verdict.collection_pose) {
       // The hit's frame turned into the collection's.
       const double turn = out->verdict.collection_pose->theta - best.pose.theta;

@@ -118,7 +118,7 @@ struct LocalizeOptions {
     return icp;
   }();
   // The best hit's pose covariance (Verdict::pose_covariance), from the
-  // correspondences `refine` finds (its own icp options are not read).
+  // correspondences `refine` finds.
   PoseCovarianceOptions pose_covariance;
   // The best guess-free alignment of the best hit's map at least
   // self_rival_radius_m (query centroid) or self_rival_angle_deg away from

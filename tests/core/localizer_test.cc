@@ -23,9 +23,13 @@
 #include "core/sim/laser.h"
 #include "core/sim/simulate.h"
 #include "core/sim/world.h"
+#include "tests/core/wall_maps.h"
 
 namespace lmd {
 namespace {
+
+using testing::CorridorWalls;
+using testing::RoomWalls;
 
 const LocalizeOptions kOptions;
 
@@ -713,20 +717,6 @@ TEST(LocalizerTest, HitsAreScoredRankedAndBounded) {
   }
 }
 
-// The walls of a w x h room centred on the origin, a point every 5 cm,
-// leaving out those within gap_m / 2 of the middle of the north wall.
-LocalMap RoomWalls(double w, double h, double gap_m = 0.0) {
-  LocalMap room;
-  for (double t = -w / 2; t <= w / 2 + 1e-9; t += 0.05) {
-    room.points.push_back({t, -h / 2});
-    if (std::abs(t) > gap_m / 2) room.points.push_back({t, h / 2});
-  }
-  for (double t = -h / 2 + 0.05; t < h / 2 - 1e-9; t += 0.05) {
-    room.points.push_back({-w / 2, t});
-    room.points.push_back({w / 2, t});
-  }
-  return room;
-}
 
 // The place, with part of a wall unseen, explains fewer query points than a
 // look-alike room 0.44 m wider and longer, which brings every point within
@@ -751,13 +741,6 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
     localize_internal::SortHits(&hits, options);
     EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
-}
-
-// Two parallel walls 2 m apart, from x0 to x1, a point every 5 cm.
-LocalMap CorridorWalls(double x0, double x1) {
-  LocalMap corridor;
-  for (double x = x0; x <= x1 + 1e-9; x += 0.05) corridor.points.push_back({x, -1.0}), corridor.points.push_back({x, 1.0});
-  return corridor;
 }
 
 // A room pins a pose: any 0.2 m slide moves its cross walls' points away.

@@ -7,37 +7,19 @@
 
 #include "core/align/icp.h"
 #include "core/align/prepared_map.h"
+#include "tests/core/wall_maps.h"
 
 namespace lmd {
 namespace {
 
-// Points every 5 cm along the segment from a to b.
-void AddWall(const Point2& a, const Point2& b, std::vector<Point2>* points) {
-  const double length = std::hypot(b.x - a.x, b.y - a.y);
-  const int steps = static_cast<int>(length / 0.05);
-  for (int i = 0; i <= steps; ++i) {
-    const double t = static_cast<double>(i) / steps;
-    points->push_back({a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)});
-  }
-}
+using testing::CorridorWalls;
+using testing::RoomWalls;
 
 // A corridor 2 m wide along x, `half_length` m either way.
-std::vector<Point2> Corridor(double half_length) {
-  std::vector<Point2> points;
-  AddWall({-half_length, -1}, {half_length, -1}, &points);
-  AddWall({-half_length, 1}, {half_length, 1}, &points);
-  return points;
-}
+std::vector<Point2> Corridor(double half_length) { return CorridorWalls(-half_length, half_length).points; }
 
 // A closed 4 m x 3 m room.
-std::vector<Point2> Room() {
-  std::vector<Point2> points;
-  AddWall({-2, -1.5}, {2, -1.5}, &points);
-  AddWall({2, -1.5}, {2, 1.5}, &points);
-  AddWall({2, 1.5}, {-2, 1.5}, &points);
-  AddWall({-2, 1.5}, {-2, -1.5}, &points);
-  return points;
-}
+std::vector<Point2> Room() { return RoomWalls(4.0, 3.0).points; }
 
 std::vector<Point2> WithNoise(std::vector<Point2> points, double sigma_m, unsigned seed) {
   std::mt19937 rng(seed);
@@ -52,7 +34,7 @@ TEST(PoseCovarianceTest, ACorridorLeavesItsLengthUnknownAndItsWidthKnown) {
   const PreparedMap db = PreparePoints(Corridor(8.0));
   const std::vector<Point2> query = WithNoise(Corridor(2.0), 0.01, 1);
   const PoseCovarianceOptions options;
-  const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, options);
+  const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, {}, options);
   // Along the corridor nothing constrains the pose but the search's reach.
   EXPECT_GT(Sigma(c, 0), 0.9 * options.max_sigma_m);
   EXPECT_LE(Sigma(c, 0), std::hypot(options.max_sigma_m, options.floor_sigma_m) + 1e-9);
@@ -77,8 +59,8 @@ TEST(PoseCovarianceTest, NoisierPointsGiveALargerCovarianceAboveTheFloor) {
   const PreparedMap db = PreparePoints(Room());
   PoseCovarianceOptions no_floor;
   no_floor.floor_sigma_m = no_floor.floor_sigma_rad = 0.0;
-  const Eigen::Matrix3d clean = PoseCovariance(WithNoise(Room(), 0.01, 3), db, {0, 0, 0}, no_floor);
-  const Eigen::Matrix3d noisy = PoseCovariance(WithNoise(Room(), 0.05, 3), db, {0, 0, 0}, no_floor);
+  const Eigen::Matrix3d clean = PoseCovariance(WithNoise(Room(), 0.01, 3), db, {0, 0, 0}, {}, no_floor);
+  const Eigen::Matrix3d noisy = PoseCovariance(WithNoise(Room(), 0.05, 3), db, {0, 0, 0}, {}, no_floor);
   for (int axis = 0; axis < 3; ++axis) EXPECT_GT(Sigma(noisy, axis), 2 * Sigma(clean, axis)) << axis;
   // The floor is what two maps of one place differ by, however well they fit.
   const Eigen::Matrix3d floored = PoseCovariance(WithNoise(Room(), 0.01, 3), db, {0, 0, 0});
@@ -91,7 +73,7 @@ TEST(PoseCovarianceTest, NothingToFitLeavesTheSearchsReach) {
   const PreparedMap db = PreparePoints(Room());
   // No query points, or none near the map's: the bound alone.
   for (const std::vector<Point2>& query : {std::vector<Point2>{}, std::vector<Point2>{{40, 40}, {41, 40}, {40, 41}}}) {
-    const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, options);
+    const Eigen::Matrix3d c = PoseCovariance(query, db, {0, 0, 0}, {}, options);
     EXPECT_DOUBLE_EQ(Sigma(c, 0), options.max_sigma_m);
     EXPECT_DOUBLE_EQ(Sigma(c, 2), options.max_sigma_rad);
     EXPECT_TRUE(c.allFinite());
