@@ -106,18 +106,17 @@ Answer::Hit ToAnswerHit(const Hit& hit, const std::unordered_map<std::string, si
 
 Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std::string, size_t>& index_of) {
   Answer a;
-  bool first_known = false;  // the response's first hit is a.hits[0]
   for (const v1::MapHit& hit : r.hits()) {
     bool known = false;
     const Answer::Hit h = ToAnswerHit(hit, index_of, &known);
     if (known) a.hits.push_back(h);
-    if (&hit == &r.hits(0)) first_known = known;
   }
   a.localized = r.localization().localized();
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
   if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
-  if (first_known && r.localization().has_pose_covariance()) {
+  // The covariance is of the response's first hit: a.hits[0] only if it was known.
+  if (r.hits_size() > 0 && index_of.count(r.hits(0).map_id()) && r.localization().has_pose_covariance()) {
     a.pose_covariance = FromProto(r.localization().pose_covariance());
   }
   a.cpu_ms = r.server_cpu_ms();
@@ -127,11 +126,9 @@ Answer FromResponse(const v1::RetrieveResponse& r, const std::unordered_map<std:
 Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map<std::string, size_t>& index_of) {
   Answer a;
   std::vector<std::pair<uint32_t, Answer::Mask>> masks;  // (rank, mask)
-  bool first_known = false;  // the response's first hit is a.hits[0]
   for (const v1::ChangeHit& change_hit : r.hits()) {
     bool known = false;
     const Answer::Hit h = ToAnswerHit(change_hit.hit(), index_of, &known);
-    if (&change_hit == &r.hits(0)) first_known = known;
     if (!known) continue;
     a.hits.push_back(h);
     for (const v1::ChangeMask& m : change_hit.masks()) {
@@ -148,7 +145,7 @@ Answer FromResponse(const v1::DetectChangesResponse& r, const std::unordered_map
   a.confidence = r.localization().confidence();
   a.rival_score = r.localization().rival_score();
   if (r.localization().has_collection_pose()) a.site_pose = FromProto(r.localization().collection_pose());
-  if (first_known && r.localization().has_pose_covariance()) {
+  if (r.hits_size() > 0 && index_of.count(r.hits(0).hit().map_id()) && r.localization().has_pose_covariance()) {
     a.pose_covariance = FromProto(r.localization().pose_covariance());
   }
   a.cpu_ms = r.server_cpu_ms();

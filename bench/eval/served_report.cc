@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "core/render/svg_writer.h"
 
@@ -37,6 +38,16 @@ std::vector<Group> Means(const ServedRun& run) {
   if (!tuned_s.empty()) out.push_back({"mean, tuned on (" + tuned_names + ")", MeanOverLogs(tuned_s), MeanOverLogs(tuned_c), tuned_s.size()});
   out.push_back({"mean, all logs", MeanOverLogs(all_s), MeanOverLogs(all_c), all_s.size()});
   return out;
+}
+
+// `row` of each log's answers to the queries as stored, then of each mean's
+// (labelled in bold, followed by `mean_note`).
+std::string StillRows(const ServedRun& run, const std::string& mean_note,
+                      const std::function<std::string(const std::string&, const AnswerSummary&)>& row) {
+  std::string rows;
+  for (const ServedLog& log : run.logs) rows += row(log.name, log.still);
+  for (const Group& g : Means(run)) rows += row("**" + g.label + "**" + mean_note, g.still);
+  return rows;
 }
 
 std::string Row(const std::string& label, const std::string& maps, const AnswerSummary& s, const AnswerSummary& c,
@@ -96,8 +107,7 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
                     100 * s.site_err_m_median, 100 * s.site_err_m_p90, s.site_err_deg_median);
       return std::string(buf);
     };
-    for (const ServedLog& log : run.logs) md += site(log.name, log.still);
-    for (const Group& g : Means(run)) md += site("**" + g.label + "**", g.still);
+    md += StillRows(run, "", site);
   }
   md += "\nPose covariance (Localization.pose_covariance): of the answers whose top hit shows the place, the "
         "share whose pose error lies within the covariance's 50 % and 95 % ellipsoids (x, y, theta; chi-square, "
@@ -109,8 +119,7 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
                   s.within_50, s.within_95, s.covariance_sure, s.sure_within_95);
     return std::string(buf);
   };
-  for (const ServedLog& log : run.logs) md += covered(log.name, log.still);
-  for (const Group& g : Means(run)) md += covered("**" + g.label + "**", g.still);
+  md += StillRows(run, "", covered);
   md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
         "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, "
         "or a rival past the hits returned), same place (a hit whose pose is its true one, to 0.2 m and 1 deg, "
@@ -125,8 +134,7 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
                   s.unsure_right_rival[4]);
     return std::string(buf);
   };
-  for (const ServedLog& log : run.logs) md += rivals(log.name, log.still);
-  for (const Group& g : Means(run)) md += rivals("**" + g.label + "** (sum)", g.still);
+  md += StillRows(run, " (sum)", rivals);
   return md;
 }
 
