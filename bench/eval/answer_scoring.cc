@@ -116,7 +116,9 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   s.queries = outcomes.size();
   size_t at1 = 0, at5 = 0, change_ok = 0, within_50 = 0, within_95 = 0, sure_within_95 = 0;
   std::vector<double> err_m, err_deg, site_m, site_deg, cpu, wall;
+  std::vector<StatedOutcome> stated;
   for (const AnswerOutcome& o : outcomes) {
+    stated.push_back({o.confidence, o.top_right});
     if (o.place_counted) {
       ++s.place_queries;
       at1 += o.first_place_hit == 0;
@@ -156,6 +158,7 @@ AnswerSummary SummarizeAnswers(const std::vector<AnswerOutcome>& outcomes) {
   s.site_err_deg_median = Quantile(site_deg, 0.5);
   s.within_50 = rate(within_50, s.covariance_count), s.within_95 = rate(within_95, s.covariance_count);
   s.sure_within_95 = rate(sure_within_95, s.covariance_sure);
+  s.reliability = MeasureReliability(stated);
   s.localized_share = rate(s.localized, s.queries);
   s.localized_precision = s.localized ? 1.0 - rate(s.localized_wrong, s.localized) : 1.0;
   s.change_success_at_1 = rate(change_ok, s.change_tasks);
@@ -188,10 +191,23 @@ AnswerSummary MeanOverLogs(const std::vector<AnswerSummary>& logs) {
     m.site_err_deg_median += s.site_err_deg_median / n;
     m.covariance_count += s.covariance_count, m.covariance_sure += s.covariance_sure;
     m.within_50 += s.within_50 / n, m.within_95 += s.within_95 / n, m.sure_within_95 += s.sure_within_95 / n;
+    Reliability& r = m.reliability;
+    r.calibration_error += s.reliability.calibration_error / n, r.brier += s.reliability.brier / n;
+    r.answers += s.reliability.answers;
+    for (int b = 0; b < kReliabilityBins; ++b) {
+      const double count = static_cast<double>(s.reliability.count[b]);
+      r.count[b] += s.reliability.count[b];
+      r.mean_probability[b] += count * s.reliability.mean_probability[b];
+      r.share_right[b] += count * s.reliability.share_right[b];
+    }
     m.localized_share += s.localized_share / n, m.localized_precision += s.localized_precision / n;
     m.change_success_at_1 += s.change_success_at_1 / n, m.false_mask_share += s.false_mask_share / n;
     m.cpu_ms_p50 += s.cpu_ms_p50 / n, m.cpu_ms_p99 += s.cpu_ms_p99 / n, m.cpu_ms_mean += s.cpu_ms_mean / n;
     m.wall_ms_p50 += s.wall_ms_p50 / n, m.wall_ms_p99 += s.wall_ms_p99 / n;
+  }
+  for (int b = 0; b < kReliabilityBins; ++b) {
+    const double count = static_cast<double>(m.reliability.count[b]);
+    if (count > 0) m.reliability.mean_probability[b] /= count, m.reliability.share_right[b] /= count;
   }
   return m;
 }
@@ -204,7 +220,7 @@ std::string SummaryJson(const AnswerSummary& s) {
                 "\"pose_err_deg_median\": %.4f, \"pose_err_deg_p90\": %.4f, \"site_count\": %zu, "
                 "\"site_err_m_median\": %.4f, \"site_err_m_p90\": %.4f, \"site_err_deg_median\": %.4f, "
                 "\"covariance_count\": %zu, \"within_50\": %.4f, \"within_95\": %.4f, \"covariance_sure\": %zu, "
-                "\"sure_within_95\": %.4f, "
+                "\"sure_within_95\": %.4f, \"calibration_error\": %.4f, \"brier\": %.4f, "
                 "\"localized\": %zu, "
                 "\"localized_share\": %.4f, \"localized_wrong\": %zu, \"localized_precision\": %.4f, "
                 "\"wrong_pose_fits_better\": %zu, \"unsure_right\": %zu, \"unsure_right_rival\": "
@@ -215,7 +231,7 @@ std::string SummaryJson(const AnswerSummary& s) {
                 s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
                 s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.site_count, s.site_err_m_median,
                 s.site_err_m_p90, s.site_err_deg_median, s.covariance_count, s.within_50, s.within_95, s.covariance_sure,
-                s.sure_within_95, s.localized, s.localized_share, s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
+                s.sure_within_95, s.reliability.calibration_error, s.reliability.brier, s.localized, s.localized_share, s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
                 s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
                 s.unsure_right_rival[4], s.change_tasks, s.change_success_at_1, s.masks, s.false_masks,
                 s.false_mask_share, s.cpu_ms_p50, s.cpu_ms_p99, s.cpu_ms_mean, s.wall_ms_p50, s.wall_ms_p99);

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "bench/eval/calibration.h"
 #include "bench/eval/eval_dataset.h"
 #include "core/types.h"
 
@@ -122,6 +123,10 @@ struct AnswerSummary {
   // 50 % and 95 % ellipsoids; of the sure ones among them, within 95 %.
   size_t covariance_count = 0, covariance_sure = 0;
   double within_50 = 0.0, within_95 = 0.0, sure_within_95 = 0.0;
+  // How well `confidence` states how often the top hit is right (top_right),
+  // over all answers (calibration.h). Of a mean over logs: the calibration
+  // error and Brier score are means, the bins the answers pooled.
+  Reliability reliability;
   double localized_share = 0.0;      // of all queries
   double localized_precision = 1.0;  // right among localized answers (1 when none)
   size_t localized = 0, localized_wrong = 0;

@@ -22,6 +22,8 @@ int RunChangeMisses(int argc, char** argv);
 int RunGlobalMisses(int argc, char** argv);
 // lmd-eval sequence-misses [--log FILE...] [--every N] [--list]
 int RunSequenceMisses(int argc, char** argv);
+// lmd-eval calibrate --run DIR... [--tuned-on a,b] [--svg FILE]
+int RunCalibrate(int argc, char** argv);
 // lmd-eval truth-audit [--log FILE...] [--every N] [--list]
 int RunTruthAudit(int argc, char** argv);
 

@@ -52,6 +52,11 @@ bool IsBagPath(const std::string& path) {
   return ext == ".mcap" || ext == ".bag" || ext == ".db3" || fs::is_directory(path);
 }
 
+const std::vector<std::string>& DefaultTunedOn() {
+  static const std::vector<std::string> logs = {"aces", "fr079", "intel", "orebro"};
+  return logs;
+}
+
 std::string DatasetName(const std::string& path) {
   std::string name = fs::path(path).filename().string();
   for (const char* ext : {".gz", ".log", ".mcap", ".bag", ".db3"}) {

@@ -20,6 +20,10 @@ std::vector<std::string> LogsIn(const std::string& dir);
 // are none.
 std::vector<std::string> LogsToMeasure(std::vector<std::string> named, std::string* error);
 
+// The logs the served configuration was tuned on (docs/results.md); the
+// others are held out.
+const std::vector<std::string>& DefaultTunedOn();
+
 // "aces" for ".../aces.log.gz" (directory and .gz/.log extensions stripped).
 std::string DatasetName(const std::string& path);
 

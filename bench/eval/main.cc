@@ -28,8 +28,9 @@ void Usage(std::FILE* out) {
                "         [--mode global|prior|tracking|sequence] [--anchor]\n"
                "      the protocol through a live lmdd (started on a temporary store unless --server): every\n"
                "      map inserted, then queried with its 10 m neighbours excluded (Retrieve) and with a\n"
-               "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv and\n"
-               "      served.svg (default DIR: out/served). The nine logs take about 3 min on 2 cores.\n"
+               "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv,\n"
+               "      served.svg and calibration.svg (default DIR: out/served). The nine logs take about 3 min\n"
+               "      on 2 cores.\n"
                "      --mode prior: each query with its true pose off by 1-3 m and 10-20 deg as a prior\n"
                "      (radius 3.5 m, sigma 20 deg); --mode tracking: off by up to 0.3 m and 2 deg (0.4 m, 3 deg);\n"
                "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
@@ -59,6 +60,11 @@ void Usage(std::FILE* out) {
                "      matched in loops of three (q in j, q in m, j in m), each match against the log's\n"
                "      relative pose and each loop's closing error, where the log's poses cancel; and the maps\n"
                "      that three or more maps of their place agree to move off their log pose (--list: each).\n"
+               "  calibrate --run DIR... [--tuned-on a,b] [--svg FILE]\n"
+               "      fits the answer's confidence (ConfidenceOptions::calibration) to the queries.csv of\n"
+               "      served runs (the tuning logs' answers of all runs pooled) and prints, per run, how well\n"
+               "      the stated and the fitted confidence match how often answers were right, held out\n"
+               "      (--svg: the fitted one's reliability diagram, a line per run).\n"
                "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
                "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
                "  export --log FILE... --out DIR\n"
@@ -82,6 +88,7 @@ int main(int argc, char** argv) {
   if (command == "change-misses") return lmd::eval::RunChangeMisses(argc - 2, argv + 2);
   if (command == "global-misses") return lmd::eval::RunGlobalMisses(argc - 2, argv + 2);
   if (command == "sequence-misses") return lmd::eval::RunSequenceMisses(argc - 2, argv + 2);
+  if (command == "calibrate") return lmd::eval::RunCalibrate(argc - 2, argv + 2);
   if (command == "truth-audit") return lmd::eval::RunTruthAudit(argc - 2, argv + 2);
   std::fprintf(stderr, "lmd-eval: unknown command '%s'\n", command.c_str());
   Usage(stderr);

@@ -41,13 +41,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr int kInsertBatch = 25;
 
-// The logs the served configuration was tuned on (docs/results.md); the
-// others are held out.
-const std::vector<std::string>& DefaultTunedOn() {
-  static const std::vector<std::string> logs = {"aces", "fr079", "intel", "orebro"};
-  return logs;
-}
-
 // How each query is asked (DESIGN.md §6).
 enum class QueryMode {
   kGlobal,    // the map alone
@@ -422,7 +415,7 @@ int RunServed(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval served: %s\n", written.message().c_str());
     return 1;
   }
-  std::printf("wrote %s/results.json, report.md, queries.csv and served.svg (%.0f s)\n", out_dir.c_str(), run.seconds);
+  std::printf("wrote %s/results.json, report.md, queries.csv, served.svg and calibration.svg (%.0f s)\n", out_dir.c_str(), run.seconds);
   return 0;
 }
 

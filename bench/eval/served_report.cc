@@ -120,6 +120,18 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
     return std::string(buf);
   };
   md += StillRows(run, "", covered);
+  md += "\nConfidence (Localization.confidence) against how often the top hit was right (the place, the pose "
+        "within 0.2 m and 1 deg), over all answers: calibration error (the answers' share in each tenth of "
+        "confidence times the gap between their mean confidence and their share right, summed) and Brier score "
+        "(mean squared gap). Lower is better; 0 is perfect.\n\n"
+        "| log | answers | calibration error | Brier score |\n|---|---|---|---|\n";
+  auto calibration = [](const std::string& label, const AnswerSummary& s) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "| %s | %zu | %.3f | %.3f |\n", label.c_str(), s.queries,
+                  s.reliability.calibration_error, s.reliability.brier);
+    return std::string(buf);
+  };
+  md += StillRows(run, "", calibration);
   md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
         "the verdict's best rival: none (the best score alone was too low), self (the best map at another pose, "
         "or a rival past the hits returned), same place (a hit whose pose is its true one, to 0.2 m and 1 deg, "
@@ -194,6 +206,18 @@ std::string Svg(const ServedRun& run) {
   return svg.ToString();
 }
 
+// The confidence's reliability diagram: the held-out and the tuning logs'
+// answers, each pooled.
+std::string CalibrationSvg(const ServedRun& run) {
+  std::vector<ReliabilitySeries> series;
+  for (const Group& g : Means(run)) {
+    if (g.label == "mean, all logs") continue;
+    const bool held_out = g.label.rfind("mean, held out", 0) == 0;
+    series.push_back({held_out ? "held-out logs" : "tuning logs", g.still.reliability});
+  }
+  return ReliabilitySvg(series, "lmd-eval served: is the confidence calibrated?");
+}
+
 }  // namespace
 
 Status WriteServedReport(const std::string& dir, const ServedRun& run, bool with_changes) {
@@ -209,7 +233,8 @@ Status WriteServedReport(const std::string& dir, const ServedRun& run, bool with
   for (const auto& [name, text] : {std::pair<std::string, std::string>{"results.json", Json(run, with_changes)},
                                    {"report.md", Markdown(run, with_changes)},
                                    {"queries.csv", csv},
-                                   {"served.svg", Svg(run)}}) {
+                                   {"served.svg", Svg(run)},
+                                   {"calibration.svg", CalibrationSvg(run)}}) {
     Status s = write(name, text);
     if (!s.ok()) return s;
   }

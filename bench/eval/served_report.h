@@ -1,6 +1,7 @@
 // What `lmd-eval served` writes: results.json (per log and means over all,
 // held-out and tuning logs), report.md (the same as tables), queries.csv
-// (one line per query, for calibration) and served.svg (a picture).
+// (one line per query, for lmd-eval calibrate), served.svg (a picture) and
+// calibration.svg (the confidence's reliability diagram).
 #pragma once
 
 #include <string>

@@ -23,12 +23,22 @@ double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_i
   return std::max(FreeSpaceShare(b.sparse_points, a, b_in_a), FreeSpaceShare(a.sparse_points, b, Inverse(b_in_a)));
 }
 
+double LogisticFit::Probability(double best_score, double margin, bool sure) const {
+  return 1.0 / (1.0 + std::exp(-(bias + score_weight * best_score + margin_weight * margin + (sure ? sure_weight : 0.0))));
+}
+
+void SetConfidence(Verdict* v, bool has_hits, const ConfidenceOptions& options) {
+  v->confidence = has_hits ? options.calibration.Probability(v->best_score, v->best_score - v->rival_score, v->sure) : 0.0;
+}
+
 double HighestHarmlessRival(double best_score, const ConfidenceOptions& options) {
   double margin = options.min_margin;
-  if (options.min_confidence >= 1.0) return -1.0;
-  if (options.min_confidence > 0.0) {  // the margin at which the confidence reaches min_confidence
-    const double logit = std::log(options.min_confidence / (1.0 - options.min_confidence));
-    margin = std::max(margin, (logit - options.bias - options.score_weight * best_score) / options.margin_weight);
+  const double p = options.min_global_probability;
+  if (p >= 1.0) return -1.0;
+  if (p > 0.0) {  // the margin at which the global line's probability reaches p
+    const LogisticFit& line = options.global_fit;
+    const double logit = std::log(p / (1.0 - p));
+    margin = std::max(margin, (logit - line.bias - line.score_weight * best_score) / line.margin_weight);
   }
   return best_score - margin;
 }
@@ -77,13 +87,13 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
     }
   }
   const double margin = v.best_score - v.rival_score;
-  v.confidence = 1.0 / (1.0 + std::exp(-(options.bias + options.score_weight * v.best_score +
-                                         options.margin_weight * margin)));
-  v.sure = v.best_score >= options.min_score && margin >= options.min_margin && v.confidence >= options.min_confidence;
+  v.sure = v.best_score >= options.min_score && margin >= options.min_margin &&
+           options.global_fit.Probability(v.best_score, margin, false) >= options.min_global_probability;
   if (options.max_pose_spread_m > 0 &&
       (v.pose_spread_m > options.max_pose_spread_m || v.pose_spread_deg > options.max_pose_spread_deg)) {
     v.sure = false;
   }
+  SetConfidence(&v, true, options);
   return v;
 }
 

@@ -26,6 +26,14 @@
 
 namespace lmd {
 
+// p = 1 / (1 + exp(-(bias + score_weight * best + margin_weight * margin +
+// sure_weight * sure))), of an answer's best score, its margin over the best
+// rival and its verdict.
+struct LogisticFit {
+  double bias = 0.0, score_weight = 0.0, margin_weight = 0.0, sure_weight = 0.0;
+  double Probability(double best_score, double margin, bool sure) const;
+};
+
 // Sure = best score >= min_score and margin over every rival >= min_margin.
 // Chosen on aces, fr079, intel and orebro (every map queried with its 10 m
 // neighbours excluded; docs/results.md): with min_score 0.6, margins 0.1 /
@@ -55,21 +63,21 @@ struct ConfidenceOptions {
   // best (they cannot be rivals within min_margin, nor place hits for changes).
   double agreement_window = 0.3;
   double same_place_m = 1.0, same_place_deg = 5.0;  // anchored hits: one place
-  // `confidence` = 1 / (1 + exp(-(bias + score_weight * best + margin_weight
-  // * margin))), fitted (logistic regression) on the same queries' outcomes.
-  double bias = -10.0, score_weight = 8.7, margin_weight = 16.9;
-  // Sure also needs that confidence: a best score just over min_score with a
-  // margin just over min_margin is right far less often than either alone
-  // suggests (0.6 and 0.2 give 0.4), and "sure" must not say more than the
-  // calibration does. 0.9: on the tuning logs' global queries the smallest
-  // value past which sure answers were not more often right (6 wrong at 0,
-  // 4 from 0.9 to 0.995). Global answers only, the kind it was fitted on:
-  // a prior answer's rivals are only those within the prior (applied to
-  // them, it left more robots of lmd-bench load --mode fleet lost, and their
-  // sequence answers in look-alike rooms started chains of sure and wrong
-  // fixes: 13 and 21 in two runs against 1), and a sequence's score is a mean
-  // over its maps (it has sequence_min_score).
-  double min_confidence = 0.9;
+  // A global answer is sure only past a line in (score, margin): where this
+  // logistic, fitted (logistic regression) to global queries' outcomes on the
+  // tuning logs, reaches min_global_probability. A best score just over
+  // min_score with a margin just over min_margin is right far less often
+  // than either alone suggests (0.6 and 0.2 give 0.4). 0.9: on the tuning
+  // logs' global queries the smallest value past which sure answers were not
+  // more often right (6 wrong at 0, 4 from 0.9 to 0.995). Global answers
+  // only, the kind it was fitted on: a prior answer's rivals are only those
+  // within the prior (applied to them, it left more robots of lmd-bench load
+  // --mode fleet lost, and their sequence answers in look-alike rooms
+  // started chains of sure and wrong fixes: 13 and 21 in two runs against
+  // 1), and a sequence's score is a mean over its maps (it has
+  // sequence_min_score). Not the answer's `confidence` (below).
+  LogisticFit global_fit{-10.0, 8.7, 16.9, 0.0};
+  double min_global_probability = 0.9;
   // Anchored hits (a site map): the median of the poses the other agreeing
   // maps that fit (min_score) give the query, at least two of them, must be
   // this close to the best hit's, or the answer is not sure (0: off). Not
@@ -94,11 +102,21 @@ struct ConfidenceOptions {
   // 0.986, lmdd CPU +59 %; 0.1 there: 0.845, 0.997, +7 and +14 % (two
   // pairs of runs).
   double min_slide_margin = 0.1;
+  // The answer's `confidence` (Verdict::confidence, SetConfidence): the
+  // probability that its best hit shows the place with the pose within 0.2 m
+  // and 1 deg, given its best score, margin and verdict. Fitted by `lmd-eval
+  // calibrate` to the served answers of the tuning logs (aces, fr079, intel,
+  // orebro), all four kinds of query pooled (global, tracking and loose
+  // priors, sequences); docs/results.md shows how well it holds on the
+  // others. The protocol's share of queries whose place is not stored (a
+  // fifth of them) is in it: where every place is mapped, answers are right
+  // more often than it says.
+  LogisticFit calibration{-6.18, 8.78, 4.96, 1.68};
 };
 
 struct Verdict {
   bool sure = false;
-  double confidence = 0.0;   // estimated probability that the best hit is right
+  double confidence = 0.0;   // ConfidenceOptions::calibration's probability that the best hit is right (0: no hits)
   double best_score = 0.0;
   // Best disagreeing hit's score, or the best map's at another pose (0 if
   // none, or if that pose was not looked for: Localize searches only for
@@ -150,8 +168,12 @@ struct JudgedHit {
 // another pose (a rival whatever the maps say; 0: none).
 Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {}, double self_rival = 0.0);
 
+// Sets v->confidence from its final best score, rival and verdict
+// (ConfidenceOptions::calibration); 0 where there is no hit.
+void SetConfidence(Verdict* v, bool has_hits, const ConfidenceOptions& options);
+
 // The highest rival score that leaves a best hit scoring `best_score` sure
-// by the margin (min_margin) and the calibrated confidence (min_confidence)
+// by the margin (min_margin) and the global line (min_global_probability)
 // Judge asks for: a rival scoring no more cannot change the verdict.
 // Negative when no margin makes it sure.
 double HighestHarmlessRival(double best_score, const ConfidenceOptions& options);

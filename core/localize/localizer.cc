@@ -195,6 +195,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->verdict.slide_margin = SlideMargin(query, hits[0], options, options.confidence);
     out->verdict.sure = out->verdict.slide_margin >= options.confidence.min_slide_margin;
   }
+  SetConfidence(&out->verdict, !hits.empty(), options.confidence);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
 

@@ -283,7 +283,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     SetCollectionPoses(source, kept);
   };
   LocalizeOptions judged = options;
-  judged.confidence.min_confidence = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
+  judged.confidence.min_global_probability = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
   // Whether a robot's nearest maps already make a sure answer.
   bool nearest_sure = false;
   if (options.prior_first_stage) {
@@ -400,6 +400,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   if (options.prior_first_stage && at &&
       std::hypot(at->x - prior.pose.x, at->y - prior.pose.y) > prior.radius_m + options.confidence.max_pose_spread_m) {
     out.verdict.sure = false;
+    SetConfidence(&out.verdict, true, judged.confidence);
   }
   out.verdict.prior_used = true;
   out.verdict.prior_failed = failed;

@@ -74,8 +74,8 @@ const Maps& TheMaps() {
 
 const Pose2 kQueryPose{4.0, 2.5, 0.3};  // the query's own frame in the room's
 
-double Logistic(const ConfidenceOptions& o, double best, double margin) {
-  return 1.0 / (1.0 + std::exp(-(o.bias + o.score_weight * best + o.margin_weight * margin)));
+double Logistic(const LogisticFit& f, double best, double margin, bool sure) {
+  return 1.0 / (1.0 + std::exp(-(f.bias + f.score_weight * best + f.margin_weight * margin + (sure ? f.sure_weight : 0.0))));
 }
 
 // --- Disagreement ---------------------------------------------------------
@@ -144,7 +144,7 @@ TEST(JudgeTest, ALoneStrongHitIsSure) {
   EXPECT_EQ(v.agreeing, 0u);
   EXPECT_TRUE(hits[0].agrees_with_best);  // the best agrees with itself
   // The documented logistic, the margin being the whole score.
-  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}, 0.9, 0.9), 1e-12);
+  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}.calibration, 0.9, 0.9, true), 1e-12);
   EXPECT_GT(v.confidence, 0.99);
 }
 
@@ -185,20 +185,20 @@ TEST(JudgeTest, ADisagreeingHitWithinTheMarginIsARival) {
   EXPECT_EQ(v.agreeing, 0u);
   EXPECT_TRUE(hits[0].agrees_with_best);
   EXPECT_FALSE(hits[1].agrees_with_best);
-  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}, 0.9, 0.1), 1e-12);
+  EXPECT_NEAR(v.confidence, Logistic(ConfidenceOptions{}.calibration, 0.9, 0.1, false), 1e-12);
 }
 
-// The score and margin thresholds alone (ConfidenceOptions::min_confidence
-// 0); the calibrated confidence's own threshold has a test below.
+// The score and margin thresholds alone (ConfidenceOptions::
+// min_global_probability 0); the global line has a test below.
 ConfidenceOptions ThresholdsOnly() {
   ConfidenceOptions options;
-  options.min_confidence = 0.0;
+  options.min_global_probability = 0.0;
   return options;
 }
 
 // A rival at the highest harmless score leaves the answer sure, one just
-// above it does not: with the margin alone, and with the confidence's own
-// threshold (which asks for more where the best score is lower).
+// above it does not: with the margin alone, and with the global line
+// (which asks for more where the best score is lower).
 TEST(JudgeTest, TheHighestHarmlessRivalIsWhereTheVerdictTurns) {
   for (const ConfidenceOptions& options : {ConfidenceOptions{}, ThresholdsOnly()}) {
     for (double best : {0.65, 0.75, 0.85, 0.95}) {
@@ -210,10 +210,10 @@ TEST(JudgeTest, TheHighestHarmlessRivalIsWhereTheVerdictTurns) {
       EXPECT_FALSE(Judge(&hits, options, harmless + 1e-3).sure) << best;
     }
   }
-  // The confidence asks for more than the margin below a best score of about 0.96.
+  // The global line asks for more than the margin below a best score of about 0.96.
   EXPECT_LT(HighestHarmlessRival(0.65, ConfidenceOptions{}), HighestHarmlessRival(0.65, ThresholdsOnly()) - 0.1);
   ConfidenceOptions never;
-  never.min_confidence = 1.0;
+  never.min_global_probability = 1.0;
   EXPECT_LT(HighestHarmlessRival(0.9, never), 0.0);
 }
 
@@ -339,17 +339,35 @@ TEST(JudgeTest, TheMarginAndScoreThresholdsAreTheOptions) {
   EXPECT_FALSE(Judge(&hits, options, 0.5).sure);
 }
 
-// Score and margin over their thresholds are not enough where the
-// calibrated confidence says such answers are often wrong.
-TEST(JudgeTest, SureNeedsTheCalibratedConfidenceToo) {
+// The confidence follows the final verdict: an answer a later test made
+// unsure (SetConfidence after it) is less likely right than the same scores
+// sure; no hits, none.
+TEST(JudgeTest, TheConfidenceFollowsTheFinalVerdict) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
-  const Verdict modest = Judge(&hits, {}, 0.65);  // margin 0.25: confidence 0.89
-  EXPECT_LT(modest.confidence, 0.9);
+  const ConfidenceOptions options;
+  Verdict v = Judge(&hits, options);
+  ASSERT_TRUE(v.sure);
+  const double sure = v.confidence;
+  v.sure = false;  // as a slide of the pose or a prior's radius would
+  SetConfidence(&v, true, options);
+  EXPECT_LT(v.confidence, sure);
+  EXPECT_NEAR(v.confidence, Logistic(options.calibration, 0.9, 0.9, false), 1e-12);
+  SetConfidence(&v, false, options);
+  EXPECT_EQ(v.confidence, 0.0);
+}
+
+// Score and margin over their thresholds are not enough where the global
+// line says such answers are often wrong.
+TEST(JudgeTest, SureNeedsTheGlobalLineToo) {
+  std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
+  const ConfidenceOptions defaults;
+  const Verdict modest = Judge(&hits, {}, 0.65);  // margin 0.25: the line's 0.89
+  EXPECT_LT(defaults.global_fit.Probability(0.9, 0.25, false), 0.9);
   EXPECT_FALSE(modest.sure);
   ConfidenceOptions lenient;
-  lenient.min_confidence = 0.85;
+  lenient.min_global_probability = 0.85;
   EXPECT_TRUE(Judge(&hits, lenient, 0.65).sure);
-  hits[0].score = 0.95;  // confidence 0.97
+  hits[0].score = 0.95;  // the line's 0.97
   EXPECT_TRUE(Judge(&hits, {}, 0.65).sure);
 }
 

@@ -1078,7 +1078,8 @@ TEST(LocalizerTest, AQueryOfAPlaceNoStoredMapShowsIsRarelySure) {
 // Two stored maps of look-alike rooms (the same room far apart, one with
 // boxes in the half the query did not see): the query fits both, and they
 // contradict each other (the boxes stand where the other map saw free
-// space). Either alone is a sure answer; together, neither is.
+// space). Either alone is a sure answer; together, neither is, and the
+// answer's confidence is lower than either alone's.
 TEST(LocalizerTest, TwoLookAlikePlacesMakeTheAnswerUnsure) {
   const Point2 here{0.0, 0.0}, far_away{40.0, 25.0};
   const LocalMap plain = StoredRoom(here, false, 1), boxed = StoredRoom(far_away, true, 2);
@@ -1089,10 +1090,12 @@ TEST(LocalizerTest, TwoLookAlikePlacesMakeTheAnswerUnsure) {
   // The query as it would stand in the boxed room (its frame at the same place there).
   const Pose2 truth_in_boxed = Compose(Inverse(Compose({-far_away.x, -far_away.y, 0.0}, boxed.truth.global_frame)),
                                        query.truth.global_frame);
+  double least_alone = 1.0;  // confidence
   for (uint64_t alone : {kPlain, kBoxed}) {
     MemoryCollection collection;
     ASSERT_TRUE(collection.Add(alone, alone == kPlain ? plain_place : boxed_place, MapSource::Route{alone, 1}).ok());
     const Localization l = LocalizeIn(collection, query);
+    least_alone = std::min(least_alone, l.verdict.confidence);
     ASSERT_FALSE(l.hits.empty()) << alone;
     EXPECT_EQ(l.hits[0].map_id, alone);
     const Pose2 truth = alone == kPlain ? truth_in_plain : truth_in_boxed;
@@ -1109,7 +1112,7 @@ TEST(LocalizerTest, TwoLookAlikePlacesMakeTheAnswerUnsure) {
   EXPECT_GT(l.verdict.rival_score, l.verdict.best_score - kOptions.confidence.min_margin);
   EXPECT_FALSE(l.hits[1].agrees_with_best);
   EXPECT_EQ(l.verdict.agreeing, 0u);
-  EXPECT_LT(l.verdict.confidence, 0.5);
+  EXPECT_LT(l.verdict.confidence, least_alone - 0.05);
 }
 
 // The simulated change of the evaluation protocol: new objects standing in
@@ -1174,7 +1177,7 @@ TEST(LocalizerTest, AnUnsureAnswerWhosePlaceIsClearStillGivesItsChangeMasks) {
   MemoryCollection collection;
   Store(EveryThirdMap(), &collection);
   LocalizeOptions never_sure = kOptions;
-  never_sure.confidence.min_confidence = 1.1;
+  never_sure.confidence.min_global_probability = 1.1;
   LocalizeOptions sure_only = never_sure;
   sure_only.changes_where_place_clear = false;
   std::mt19937_64 rng(3);
