@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bench/bench/reobserve.h"
+#include "bench/common/calibration.h"
 #include "bench/common/flags.h"
 #include "client/lmd_client.h"
 #include "core/eval/ground_truth.h"
@@ -168,6 +169,7 @@ struct AnswerRow {
   std::string top_hit;  // "" if none
   Pose2 got;  // the query's pose in the collection's frame, if posed
   bool right = false;  // posed within 0.2 m / 1 deg of the truth (the site frame is the world's)
+  double confidence = 0.0;  // Localization.confidence
 };
 
 // A robot of --mode fleet: it starts where it knows it is (a dock: its
@@ -226,6 +228,7 @@ AnswerRow ReadAnswer(const LocalMap& map, const v1::DetectChangesRequest& reques
   row.prior_radius_m = request.has_prior() ? request.prior().radius_m() : 0.0;
   row.reduced_depth = response.reduced_depth();
   row.localized = verdict.localized();
+  row.confidence = verdict.confidence();
   row.prior_failed = verdict.prior_failed();
   row.sequence_maps = static_cast<int>(verdict.sequence_maps());
   row.posed = verdict.has_collection_pose();
@@ -284,12 +287,14 @@ void PrintFleet(const std::vector<std::vector<AnswerRow>>& rows, const std::vect
   size_t sure_wrong = 0, wrong_by_prior = 0, wrong_by_sequence = 0, wrong_within_1m = 0;
   // Answers where a seeded map shows the place: all, right, failed priors.
   size_t at_seeded = 0, right_seeded = 0, failed_seeded = 0;
+  std::vector<StatedOutcome> stated;  // the confidence against a right fix
   for (size_t r = 0; r < rows.size(); ++r) {
     for (size_t t = 0; t < rows[r].size(); ++t) {
       const AnswerRow& a = rows[r][t];
       if (!a.answered) continue;
       const bool prior = std::string(a.asked) == "prior", sequence = std::string(a.asked) == "sequence";
       ++asked, right += a.right, sure += a.localized, sure_unposed += a.localized && !a.posed;
+      stated.push_back({a.confidence, a.right});
       by_prior += prior, by_sequence += sequence, prior_failed += a.prior_failed;
       if (a.localized && a.posed && !a.right) {
         ++sure_wrong, wrong_by_prior += prior, wrong_by_sequence += sequence;
@@ -308,6 +313,16 @@ void PrintFleet(const std::vector<std::vector<AnswerRow>>& rows, const std::vect
               static_cast<double>(right_seeded) / std::max<size_t>(1, at_seeded), sure, sure / n, sure_wrong,
               wrong_by_prior, wrong_by_sequence, wrong_within_1m, sure_unposed, by_prior, prior_failed, failed_seeded,
               by_sequence, asked - by_prior - by_sequence);
+  const Reliability reliability = MeasureReliability(stated);
+  std::printf("fleet: confidence against right fixes: calibration error %.3f, Brier score %.3f", reliability.calibration_error,
+              reliability.brier);
+  for (int b = 0; b < kReliabilityBins; ++b) {
+    if (reliability.count[b] > 0) {
+      std::printf("; %.1f-%.1f: %zu said %.3f, right %.3f", b / 10.0, (b + 1) / 10.0, reliability.count[b],
+                  reliability.mean_probability[b], reliability.share_right[b]);
+    }
+  }
+  std::printf("\n");
 }
 
 // --answers: one line per DetectChanges of the run, tab-separated, with a
@@ -319,7 +334,7 @@ Status WriteAnswers(const std::string& path, const std::vector<std::vector<Answe
   if (out == nullptr) return Status::InvalidArgument("cannot write " + path);
   std::fprintf(out, "robot\ttick\tanswered\tasked\tprior_radius_m\treduced_depth\tlatency_ms\tlocalized\t"
                     "prior_failed\tsequence_maps\ttop_hit\ttop_hit_shows_place\tposed\tright\terror_m\t"
-                    "error_deg\ttruth_x\ttruth_y\ttruth_theta\tgot_x\tgot_y\tgot_theta\n");
+                    "error_deg\ttruth_x\ttruth_y\ttruth_theta\tgot_x\tgot_y\tgot_theta\tconfidence\n");
   for (size_t r = 0; r < rows.size(); ++r) {
     for (size_t t = 0; t < rows[r].size(); ++t) {
       const AnswerRow& a = rows[r][t];
@@ -327,12 +342,12 @@ Status WriteAnswers(const std::string& path, const std::vector<std::vector<Answe
       const LocalMap* hit = MapOfId(a.top_hit, seed, robot_maps, first_robot);
       const Pose2& truth = map.truth.global_frame;
       std::fprintf(out, "robot%zu\t%zu\t%d\t%s\t%.2f\t%d\t%.2f\t%d\t%d\t%d\t%s\t%s\t%d\t%d\t%.3f\t%.2f\t%.3f\t"
-                        "%.3f\t%.4f\t%.3f\t%.3f\t%.4f\n",
+                        "%.3f\t%.4f\t%.3f\t%.3f\t%.4f\t%.4f\n",
                    first_robot + r, t, a.answered, a.asked, a.prior_radius_m, a.reduced_depth, a.latency_ms,
                    a.localized, a.prior_failed, a.sequence_maps, a.top_hit.empty() ? "-" : a.top_hit.c_str(),
                    hit == nullptr ? "-" : PlaceOverlap(map, *hit) >= 0.5 ? "1" : "0", a.posed, a.right,
                    a.posed ? PositionError(a, map) : NAN, a.posed ? HeadingErrorDeg(a, map) : NAN, truth.x, truth.y,
-                   truth.theta, a.got.x, a.got.y, a.got.theta);
+                   truth.theta, a.got.x, a.got.y, a.got.theta, a.confidence);
     }
   }
   if (std::fclose(out) != 0) return Status::InvalidArgument("cannot write " + path);

@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "bench/eval/calibration.h"
+#include "bench/common/calibration.h"
 #include "bench/eval/eval_dataset.h"
 #include "core/types.h"
 

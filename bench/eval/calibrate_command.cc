@@ -15,7 +15,7 @@
 
 #include "bench/common/flags.h"
 #include "bench/eval/answer_scoring.h"
-#include "bench/eval/calibration.h"
+#include "bench/common/calibration.h"
 #include "bench/eval/commands.h"
 #include "bench/eval/data_paths.h"
 #include "core/util/split.h"

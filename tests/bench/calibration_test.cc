@@ -1,4 +1,4 @@
-#include "bench/eval/calibration.h"
+#include "bench/common/calibration.h"
 
 #include <cmath>
 #include <random>
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-namespace lmd::eval {
+namespace lmd {
 namespace {
 
 TEST(ReliabilityTest, BinsTheAnswersAndSumsTheGaps) {
@@ -61,4 +61,4 @@ TEST(FitLogisticTest, SeparableOutcomesKeepFiniteWeights) {
 }
 
 }  // namespace
-}  // namespace lmd::eval
+}  // namespace lmd

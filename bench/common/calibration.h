@@ -9,7 +9,7 @@
 
 #include "core/localize/confidence.h"
 
-namespace lmd::eval {
+namespace lmd {
 
 // One answer: the probability it was given, and whether it was right.
 struct StatedOutcome {
@@ -50,4 +50,4 @@ struct CalibrationSample {
 // that a feature that separates the outcomes cannot run off to infinity).
 LogisticFit FitLogistic(const std::vector<CalibrationSample>& samples);
 
-}  // namespace lmd::eval
+}  // namespace lmd

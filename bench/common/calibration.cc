@@ -1,4 +1,4 @@
-#include "bench/eval/calibration.h"
+#include "bench/common/calibration.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "core/render/svg_writer.h"
 
-namespace lmd::eval {
+namespace lmd {
 
 Reliability MeasureReliability(const std::vector<StatedOutcome>& outcomes) {
   Reliability r;
@@ -94,4 +94,4 @@ LogisticFit FitLogistic(const std::vector<CalibrationSample>& samples) {
   return LogisticFit{w[0], w[1], w[2], w[3]};
 }
 
-}  // namespace lmd::eval
+}  // namespace lmd
