@@ -314,8 +314,8 @@ void PrintFleet(const std::vector<std::vector<AnswerRow>>& rows, const std::vect
               wrong_by_prior, wrong_by_sequence, wrong_within_1m, sure_unposed, by_prior, prior_failed, failed_seeded,
               by_sequence, asked - by_prior - by_sequence);
   const Reliability reliability = MeasureReliability(stated);
-  std::printf("fleet: confidence against right fixes: calibration error %.3f, Brier score %.3f", reliability.calibration_error,
-              reliability.brier);
+  std::printf("fleet: confidence against right fixes: calibration error %.3f, Brier score %.3f",
+              reliability.calibration_error, reliability.brier);
   for (int b = 0; b < kReliabilityBins; ++b) {
     if (reliability.count[b] > 0) {
       std::printf("; %.1f-%.1f: %zu said %.3f, right %.3f", b / 10.0, (b + 1) / 10.0, reliability.count[b],

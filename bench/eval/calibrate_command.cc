@@ -129,7 +129,8 @@ int RunCalibrate(int argc, char** argv) {
               training.size(), fit.bias, fit.score_weight, fit.margin_weight, fit.sure_weight);
   std::printf("Calibration error / Brier score (lower is better), of the confidence each run's lmdd stated and of "
               "the fitted one:\n\n");
-  std::printf("| run | answers held out | held out: stated | fitted | tuning logs: stated | fitted |\n|---|---|---|---|---|---|\n");
+  std::printf("| run | answers held out | held out: stated | fitted | tuning logs: stated | fitted |\n"
+              "|---|---|---|---|---|---|\n");
   std::vector<StatedOutcome> pooled_held_out;
   std::vector<ReliabilitySeries> series;
   for (size_t i = 0; i < dirs.size(); ++i) {

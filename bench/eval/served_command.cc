@@ -415,7 +415,8 @@ int RunServed(int argc, char** argv) {
     std::fprintf(stderr, "lmd-eval served: %s\n", written.message().c_str());
     return 1;
   }
-  std::printf("wrote %s/results.json, report.md, queries.csv, served.svg and calibration.svg (%.0f s)\n", out_dir.c_str(), run.seconds);
+  std::printf("wrote %s/results.json, report.md, queries.csv, served.svg and calibration.svg (%.0f s)\n",
+              out_dir.c_str(), run.seconds);
   return 0;
 }
 

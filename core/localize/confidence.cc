@@ -24,11 +24,13 @@ double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_i
 }
 
 double LogisticFit::Probability(double best_score, double margin, bool sure) const {
-  return 1.0 / (1.0 + std::exp(-(bias + score_weight * best_score + margin_weight * margin + (sure ? sure_weight : 0.0))));
+  const double z = bias + score_weight * best_score + margin_weight * margin + (sure ? sure_weight : 0.0);
+  return 1.0 / (1.0 + std::exp(-z));
 }
 
 void SetConfidence(Verdict* v, bool has_hits, const ConfidenceOptions& options) {
-  v->confidence = has_hits ? options.calibration.Probability(v->best_score, v->best_score - v->rival_score, v->sure) : 0.0;
+  const double margin = v->best_score - v->rival_score;
+  v->confidence = has_hits ? options.calibration.Probability(v->best_score, margin, v->sure) : 0.0;
 }
 
 double HighestHarmlessRival(double best_score, const ConfidenceOptions& options) {

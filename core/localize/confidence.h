@@ -116,7 +116,7 @@ struct ConfidenceOptions {
 
 struct Verdict {
   bool sure = false;
-  double confidence = 0.0;   // ConfidenceOptions::calibration's probability that the best hit is right (0: no hits)
+  double confidence = 0.0;   // probability that the best hit is right (calibration; 0: no hits)
   double best_score = 0.0;
   // Best disagreeing hit's score, or the best map's at another pose (0 if
   // none, or if that pose was not looked for: Localize searches only for

@@ -283,7 +283,8 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     SetCollectionPoses(source, kept);
   };
   LocalizeOptions judged = options;
-  judged.confidence.min_global_probability = 0.0;  // fitted to global answers; a prior rules most look-alikes out itself
+  // Fitted to global answers; a prior rules most look-alikes out itself.
+  judged.confidence.min_global_probability = 0.0;
   // Whether a robot's nearest maps already make a sure answer.
   bool nearest_sure = false;
   if (options.prior_first_stage) {

@@ -46,7 +46,9 @@ TEST(FitLogisticTest, RecoversTheWeightsItWasDrawnFrom) {
   EXPECT_NEAR(fit.margin_weight, truth.margin_weight, 0.8);
   EXPECT_NEAR(fit.sure_weight, truth.sure_weight, 0.5);
   std::vector<StatedOutcome> stated;
-  for (const CalibrationSample& s : samples) stated.push_back({fit.Probability(s.best_score, s.margin, s.sure), s.right});
+  for (const CalibrationSample& s : samples) {
+    stated.push_back({fit.Probability(s.best_score, s.margin, s.sure), s.right});
+  }
   EXPECT_LT(MeasureReliability(stated).calibration_error, 0.02);
 }
 

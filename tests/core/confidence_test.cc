@@ -75,7 +75,8 @@ const Maps& TheMaps() {
 const Pose2 kQueryPose{4.0, 2.5, 0.3};  // the query's own frame in the room's
 
 double Logistic(const LogisticFit& f, double best, double margin, bool sure) {
-  return 1.0 / (1.0 + std::exp(-(f.bias + f.score_weight * best + f.margin_weight * margin + (sure ? f.sure_weight : 0.0))));
+  const double z = f.bias + f.score_weight * best + f.margin_weight * margin + (sure ? f.sure_weight : 0.0);
+  return 1.0 / (1.0 + std::exp(-z));
 }
 
 // --- Disagreement ---------------------------------------------------------
