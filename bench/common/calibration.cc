@@ -15,12 +15,14 @@ Reliability MeasureReliability(const std::vector<StatedOutcome>& outcomes) {
   r.answers = outcomes.size();
   if (outcomes.empty()) return r;
   for (const StatedOutcome& o : outcomes) {
-    const int bin = std::clamp(static_cast<int>(o.probability * kReliabilityBins), 0, kReliabilityBins - 1);
+    // A probability outside [0, 1] (none lmdd states) counts at the nearest end; NaN as 0.
+    const double p = std::isnan(o.probability) ? 0.0 : std::clamp(o.probability, 0.0, 1.0);
+    const int bin = std::min(static_cast<int>(p * kReliabilityBins), kReliabilityBins - 1);
     ++r.count[bin];
-    r.mean_probability[bin] += o.probability;
+    r.mean_probability[bin] += p;
     const double outcome = o.right ? 1.0 : 0.0;
     r.share_right[bin] += outcome;
-    r.brier += (o.probability - outcome) * (o.probability - outcome);
+    r.brier += (p - outcome) * (p - outcome);
   }
   const double n = static_cast<double>(outcomes.size());
   r.brier /= n;

@@ -6,6 +6,7 @@
 // and of the fitted one, on the tuning logs and on the others; --svg FILE
 // draws the fitted one's reliability on the others, a line per run.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -79,6 +80,10 @@ bool ReadRun(const std::string& dir, std::vector<Row>* rows, std::string* error)
       r.sample.best_score = std::stod(f[column["best_score"]]);
       r.sample.margin = r.sample.best_score - std::stod(f[column["rival_score"]]);
       r.stated = std::stod(f[column["confidence"]]);
+      if (!std::isfinite(r.sample.best_score) || !std::isfinite(r.sample.margin) || !(r.stated >= 0.0 && r.stated <= 1.0)) {
+        *error = path + ":" + std::to_string(number) + ": a score is not finite or the confidence is not in [0, 1]";
+        return false;
+      }
       rows->push_back(std::move(r));
     } catch (const std::exception&) {
       *error = path + ":" + std::to_string(number) + ": a field is not a number";

@@ -25,6 +25,16 @@ TEST(ReliabilityTest, BinsTheAnswersAndSumsTheGaps) {
   EXPECT_EQ(MeasureReliability({}).answers, 0u);
 }
 
+// Probabilities outside [0, 1] count at the nearest end, NaN as 0: every
+// answer lands in a bin.
+TEST(ReliabilityTest, ProbabilitiesOutOfRangeCountAtTheEnds) {
+  const Reliability r = MeasureReliability({{1.5, true}, {-0.2, false}, {std::nan(""), false}});
+  EXPECT_EQ(r.count[kReliabilityBins - 1], 1u);
+  EXPECT_EQ(r.count[0], 2u);
+  EXPECT_NEAR(r.brier, 0.0, 1e-12);
+  EXPECT_NEAR(r.calibration_error, 0.0, 1e-12);
+}
+
 // Answers drawn from a known logistic: the fit finds its weights, and the
 // probabilities it states are calibrated.
 TEST(FitLogisticTest, RecoversTheWeightsItWasDrawnFrom) {
