@@ -124,8 +124,9 @@ int RunCalibrate(int argc, char** argv) {
     }
   }
   if (training.empty()) {
-    std::fprintf(stderr, "lmd-eval calibrate: no answer of the tuning logs (%s) in the runs\n",
-                 args.Get("tuned-on", "aces,fr079,intel,orebro").c_str());
+    std::string names;
+    for (const std::string& log : tuned_list) names += (names.empty() ? "" : ",") + log;
+    std::fprintf(stderr, "lmd-eval calibrate: no answer of the tuning logs (%s) in the runs\n", names.c_str());
     return 1;
   }
   const LogisticFit fit = FitLogistic(training);
