@@ -230,8 +230,9 @@ std::string SummaryJson(const AnswerSummary& s) {
                 "\"wall_ms_p50\": %.3f, \"wall_ms_p99\": %.3f}",
                 s.queries, s.place_queries, s.place_at_1, s.place_at_5, s.pose_count, s.pose_err_m_median,
                 s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.site_count, s.site_err_m_median,
-                s.site_err_m_p90, s.site_err_deg_median, s.covariance_count, s.within_50, s.within_95, s.covariance_sure,
-                s.sure_within_95, s.reliability.calibration_error, s.reliability.brier, s.localized, s.localized_share, s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
+                s.site_err_m_p90, s.site_err_deg_median, s.covariance_count, s.within_50, s.within_95,
+                s.covariance_sure, s.sure_within_95, s.reliability.calibration_error, s.reliability.brier, s.localized,
+                s.localized_share, s.localized_wrong, s.localized_precision, s.wrong_pose_fits_better, s.unsure_right,
                 s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2], s.unsure_right_rival[3],
                 s.unsure_right_rival[4], s.change_tasks, s.change_success_at_1, s.masks, s.false_masks,
                 s.false_mask_share, s.cpu_ms_p50, s.cpu_ms_p99, s.cpu_ms_mean, s.wall_ms_p50, s.wall_ms_p99);

@@ -80,7 +80,8 @@ bool ReadRun(const std::string& dir, std::vector<Row>* rows, std::string* error)
       r.sample.best_score = std::stod(f[column["best_score"]]);
       r.sample.margin = r.sample.best_score - std::stod(f[column["rival_score"]]);
       r.stated = std::stod(f[column["confidence"]]);
-      if (!std::isfinite(r.sample.best_score) || !std::isfinite(r.sample.margin) || !(r.stated >= 0.0 && r.stated <= 1.0)) {
+      const bool finite = std::isfinite(r.sample.best_score) && std::isfinite(r.sample.margin);
+      if (!finite || !(r.stated >= 0.0 && r.stated <= 1.0)) {
         *error = path + ":" + std::to_string(number) + ": a score is not finite or the confidence is not in [0, 1]";
         return false;
       }

@@ -288,7 +288,8 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
                   r.rival_score, RivalName(r.still.rival), r.agreeing, r.still.cpu_ms, r.still.wall_ms,
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
                   r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str(),
-                  r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0, r.still.pose_d2);
+                  r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0,
+                  r.still.pose_d2);
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);

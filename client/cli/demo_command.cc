@@ -202,10 +202,10 @@ int DemoCommand(const CommandContext& ctx) {
       ++unsure_lookalike;
       turned += error_deg >= 45.0;
     }
-    std::printf("\n           top hit %-10s score %.3f, %s (confidence %.2f); site pose error %.2f m %.1f deg: %s%s\n",
+    std::printf("\n           top hit %-10s score %.3f, %s (confidence %.2f); site pose error %.2f m %.1f deg: "
+                "%s%s\n",
                 top.map_id().c_str(), top.score(), verdict.localized() ? "sure" : "NOT sure", verdict.confidence(),
-                error_m, error_deg,
-                pose_right ? "right" : seen ? "WRONG" : "new place",
+                error_m, error_deg, pose_right ? "right" : seen ? "WRONG" : "new place",
                 verdict.sequence_maps() > 0 ? (", " + std::to_string(verdict.sequence_agreeing()) + " of " +
                                                std::to_string(verdict.sequence_maps()) + " earlier maps agree")
                                                   .c_str()

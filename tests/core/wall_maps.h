@@ -27,7 +27,10 @@ inline LocalMap RoomWalls(double w, double h, double gap_m = 0.0) {
 // Two parallel walls 2 m apart (y = -1 and 1), from x0 to x1.
 inline LocalMap CorridorWalls(double x0, double x1) {
   LocalMap corridor;
-  for (double x = x0; x <= x1 + 1e-9; x += 0.05) corridor.points.push_back({x, -1.0}), corridor.points.push_back({x, 1.0});
+  for (double x = x0; x <= x1 + 1e-9; x += 0.05) {
+    corridor.points.push_back({x, -1.0});
+    corridor.points.push_back({x, 1.0});
+  }
   return corridor;
 }
 
