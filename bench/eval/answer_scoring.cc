@@ -88,6 +88,11 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
       PoseError(*answer.site_pose, d.maps[q.map].truth.global_frame, &o.site_err_m, &o.site_err_deg);
     }
   }
+  if (answer.pose_covariance) {
+    const Eigen::Matrix3d& c = *answer.pose_covariance;
+    o.position_sd_m = std::sqrt(std::max(0.0, c.topLeftCorner<2, 2>().selfadjointView<Eigen::Lower>().eigenvalues().maxCoeff()));
+    o.heading_sd_deg = std::sqrt(std::max(0.0, c(2, 2))) * 180.0 / M_PI;
+  }
   o.top_right = o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
   o.localized = answer.localized;
   o.localized_right = o.localized && o.top_right;

@@ -81,6 +81,10 @@ struct AnswerOutcome {
   // it; -1 elsewhere. A calibrated covariance puts it below the chi-square
   // (3 dof) quantile q for a share q of the answers.
   double pose_d2 = -1.0;
+  // The answer's pose covariance as standard deviations: the position's
+  // along its least known direction (m) and the heading's (deg); -1 where
+  // the answer has none.
+  double position_sd_m = -1.0, heading_sd_deg = -1.0;
   bool localized = false;
   bool localized_right = false;  // localized and top_right
   // Sure and wrong by a near miss (the right place, the pose beyond

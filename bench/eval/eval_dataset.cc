@@ -65,6 +65,7 @@ Result<LaserLog> ReadTruthBag(const std::string& path, const DatasetOptions& opt
   BagLogOptions bag;
   bag.frame = options.truth_frame;
   bag.odom_topic = options.truth_odom;
+  if (options.max_range_m > 0) bag.max_usable_range = options.max_range_m;
   return ReadBagLaserLog(path, bag);
 }
 
@@ -74,7 +75,9 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
   const auto start = std::chrono::steady_clock::now();
   Dataset d;
   d.name = DatasetName(log_path);
-  Result<LaserLog> log = IsBagPath(log_path) ? ReadTruthBag(log_path, options) : ReadCarmenLog(log_path);
+  CarmenReadOptions carmen;
+  if (options.max_range_m > 0) carmen.max_usable_range = options.max_range_m;
+  Result<LaserLog> log = IsBagPath(log_path) ? ReadTruthBag(log_path, options) : ReadCarmenLog(log_path, carmen);
   if (!log.ok()) return log.status();
   LocalMapOptions lm;
   lm.id_prefix = d.name;

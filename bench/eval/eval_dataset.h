@@ -61,6 +61,10 @@ struct DatasetOptions {
   // this nav_msgs/Odometry topic; one of the two is required.
   std::string truth_frame;
   std::string truth_odom;
+  // m, > 0: the laser taken as one that reaches only this far (readings at
+  // or beyond it are no return), as a robot with a shorter-range sensor than
+  // the logs' would see the same place. 0: the readers' default (30 m).
+  float max_range_m = 0.0f;
 };
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

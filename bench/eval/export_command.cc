@@ -25,21 +25,27 @@
 namespace lmd::eval {
 
 int RunExport(int argc, char** argv) {
-  Flags args({"log", "out"});
+  Flags args({"log", "out", "max-range"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
   }
   std::vector<std::string> logs = args.GetAll("log");
   const std::string out = args.Get("out");
+  double max_range = 0.0;
+  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range)) {
+    std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
+    return 2;
+  }
   if (logs.empty() || out.empty()) {
-    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR\n");
+    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR [--max-range M]\n");
     return 2;
   }
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   for (const std::string& log : logs) {
     DatasetOptions o;
+    o.max_range_m = static_cast<float>(max_range);
     Result<Dataset> d = LoadDataset(log, o);
     if (!d.ok()) {
       std::fprintf(stderr, "lmd-eval export: %s\n", d.status().ToString().c_str());

@@ -281,7 +281,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     if (options.changes) changed.push_back(r.changed);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f,%.3f\n",
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f,%.3f,%.4f,%.3f\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
@@ -289,7 +289,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
                   r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str(),
                   r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0,
-                  r.still.pose_d2);
+                  r.still.pose_d2, r.still.position_sd_m, r.still.heading_sd_deg);
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);
@@ -307,7 +307,7 @@ std::string Now() {
 }  // namespace
 
 int RunServed(int argc, char** argv) {
-  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame", "truth-odom", "tuned-on"}, {"no-changes", "anchor"});
+  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame", "truth-odom", "tuned-on", "max-range"}, {"no-changes", "anchor"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
@@ -318,11 +318,13 @@ int RunServed(int argc, char** argv) {
   dataset.truth_frame = args.Get("truth-frame");
   dataset.truth_odom = args.Get("truth-odom");
   uint64_t max_queries = 0, threads = 1, verify = 0;
-  if (!args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
+  double max_range = 0.0;
+  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
       !args.Count("verify", 0, 1000000, 0, &verify) || !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
+  dataset.max_range_m = static_cast<float>(max_range);
   options.max_queries = static_cast<size_t>(max_queries);
   options.threads = static_cast<int>(threads);
   options.verify = static_cast<uint32_t>(verify);
