@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/align/icp.h"
 #include "core/localmap/pose_ops.h"
 
@@ -31,6 +33,15 @@ double LogisticFit::Probability(double best_score, double margin, bool sure) con
 void SetConfidence(Verdict* v, bool has_hits, const ConfidenceOptions& options) {
   const double margin = v->best_score - v->rival_score;
   v->confidence = has_hits ? options.calibration.Probability(v->best_score, margin, v->sure) : 0.0;
+}
+
+bool PoseKnownToPromise(const Eigen::Matrix3d& covariance, const ConfidenceOptions& options) {
+  if (options.promise_sigmas <= 0) return true;
+  const Eigen::Matrix2d position = covariance.topLeftCorner<2, 2>();
+  const double position_variance = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(position).eigenvalues().maxCoeff();
+  const double heading_sd_deg = std::sqrt(std::max(0.0, covariance(2, 2))) * 180 / M_PI;
+  return options.promise_sigmas * std::sqrt(std::max(0.0, position_variance)) <= options.max_pose_spread_m &&
+         options.promise_sigmas * heading_sd_deg <= options.max_pose_spread_deg;
 }
 
 double HighestHarmlessRival(double best_score, const ConfidenceOptions& options) {

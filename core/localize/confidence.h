@@ -102,6 +102,25 @@ struct ConfidenceOptions {
   // 0.986, lmdd CPU +59 %; 0.1 there: 0.845, 0.997, +7 and +14 % (two
   // pairs of runs).
   double min_slide_margin = 0.1;
+  // ... and its own fit must know the pose that closely: the promise
+  // (max_pose_spread_m along the least known direction, max_pose_spread_deg
+  // of heading) at least this many standard deviations of the answer's pose
+  // covariance (Verdict::pose_covariance, PoseCovariance in icp.h; 0: off).
+  // Not fitted: 2.81 is the two-sided normal quantile of 99.5 %, the share
+  // of sure answers that must be right; the covariance's scale and floor
+  // were fitted on the tuning logs before (PoseCovarianceOptions). It is
+  // what a shorter-range laser needs: its maps' walls lie close to the
+  // robot and pin the heading less, and two walls meeting at a corner fit
+  // many places. Served (lmd-eval served, 2026-12-07, one lmdd with and
+  // without; held out, mean over logs): global sure 0.385 -> 0.352 of the
+  // answers, right 99.30 -> 99.84 % (5 -> 1 wrong; tuning logs 2 -> 0);
+  // tracking priors 0.552 -> 0.492, 99.54 -> 99.90 % (10 -> 4); loose
+  // priors 0.537 -> 0.477, 99.51 -> 99.95 % (8 -> 2); sequences 0.351 ->
+  // 0.337, none wrong either way. The logs read as by a 5.6 m laser
+  // (--max-range 5.6): global 0.185 -> 0.063, 94.74 -> 99.58 % (17 -> 1),
+  // tracking 0.330 -> 0.105, 97.60 -> 100 % (19 -> 0). Place@1, poses and
+  // change masks the same (docs/results.md, twenty-second stop).
+  double promise_sigmas = 2.81;
   // The answer's `confidence` (Verdict::confidence, SetConfidence): the
   // probability that its best hit shows the place with the pose within 0.2 m
   // and 1 deg, given its best score, margin and verdict. Fitted by `lmd-eval
@@ -167,6 +186,11 @@ struct JudgedHit {
 // agrees with itself). `self_rival`: the score of the best hit's map at
 // another pose (a rival whatever the maps say; 0: none).
 Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {}, double self_rival = 0.0);
+
+// True when `covariance` (x, y in m, theta in rad) knows the pose to the
+// promise (max_pose_spread_m, max_pose_spread_deg) at promise_sigmas
+// standard deviations, or when promise_sigmas is 0.
+bool PoseKnownToPromise(const Eigen::Matrix3d& covariance, const ConfidenceOptions& options);
 
 // Sets v->confidence from its final best score, rival and verdict
 // (ConfidenceOptions::calibration); 0 where there is no hit.

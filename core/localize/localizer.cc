@@ -190,11 +190,17 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // points (min_sure_points).
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
-  // Nor one whose map does not pin its pose as closely as a sure answer promises.
+  if (!hits.empty() && hits[0].db) {
+    out->verdict.pose_covariance =
+        PoseCovariance(query.match.points, *hits[0].db, hits[0].pose, options.refine, options.pose_covariance);
+  }
+  // Nor one whose map does not pin its pose as closely as a sure answer
+  // promises, nor one whose fit does not know it that closely.
   if (out->verdict.sure && options.confidence.min_slide_margin > 0) {
     out->verdict.slide_margin = SlideMargin(query, hits[0], options, options.confidence);
     out->verdict.sure = out->verdict.slide_margin >= options.confidence.min_slide_margin;
   }
+  if (out->verdict.sure) out->verdict.sure = PoseKnownToPromise(out->verdict.pose_covariance, options.confidence);
   SetConfidence(&out->verdict, !hits.empty(), options.confidence);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
@@ -225,8 +231,6 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   }
   if (!hits.empty() && hits[0].db) {
     const LocalizedHit& best = hits[0];
-    out->verdict.pose_covariance =
-        PoseCovariance(query.match.points, *best.db, best.pose, options.refine, options.pose_covariance);
     if (out->verdict.collection_pose) {
       // The hit's frame turned into the collection's.
       const double turn = out->verdict.collection_pose->theta - best.pose.theta;

@@ -372,6 +372,31 @@ TEST(JudgeTest, SureNeedsTheGlobalLineToo) {
   EXPECT_TRUE(Judge(&hits, {}, 0.65).sure);
 }
 
+// The promise (0.2 m, 1 deg) must lie promise_sigmas standard deviations
+// out: along the position's least known direction, whatever the axes, and
+// in heading.
+TEST(JudgeTest, APoseIsKnownToThePromiseOnlyAtEnoughSigmas) {
+  const ConfidenceOptions options;
+  const double degree = M_PI / 180;
+  const auto covariance = [](double sx, double sy, double s_theta) {
+    return Eigen::Vector3d(sx * sx, sy * sy, s_theta * s_theta).asDiagonal().toDenseMatrix();
+  };
+  EXPECT_TRUE(PoseKnownToPromise(covariance(0.03, 0.03, 0.3 * degree), options));
+  EXPECT_FALSE(PoseKnownToPromise(covariance(0.03, 0.03, 0.4 * degree), options));  // 2.81 x 0.4 > 1 deg
+  EXPECT_FALSE(PoseKnownToPromise(covariance(0.03, 0.08, 0.3 * degree), options));  // 2.81 x 8 cm > 0.2 m
+  // 8 cm along the diagonal, 1 cm across it: each axis alone reads 5.7 cm.
+  Eigen::Matrix3d diagonal = covariance(0.08, 0.01, 0.3 * degree);
+  const double c = std::cos(M_PI / 4), s = std::sin(M_PI / 4);
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  turn.topLeftCorner<2, 2>() << c, -s, s, c;
+  diagonal = turn * diagonal * turn.transpose();
+  EXPECT_LT(options.promise_sigmas * std::sqrt(diagonal(0, 0)), options.max_pose_spread_m);
+  EXPECT_FALSE(PoseKnownToPromise(diagonal, options));
+  ConfidenceOptions unchecked;
+  unchecked.promise_sigmas = 0;
+  EXPECT_TRUE(PoseKnownToPromise(covariance(1.0, 1.0, 10 * degree), unchecked));
+}
+
 // Hits far below the best (best - agreement_window) are not compared: no
 // rival, and no place hit either.
 TEST(JudgeTest, HitsBelowTheAgreementWindowAreNotCompared) {

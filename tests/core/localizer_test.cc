@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/align/icp.h"
 #include "core/eval/ground_truth.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localize/memory_collection.h"
@@ -741,6 +742,31 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
     localize_internal::SortHits(&hits, options);
     EXPECT_EQ(hits[0].map_id, weight > 0 ? 1u : 2u) << "closeness weight " << weight;
   }
+}
+
+// A sure answer's pose must be known to what it promises by its own fit:
+// a whole room's walls know the heading; the two short walls of one of its
+// corners, as a laser of a few metres' range sees them, fit at the true pose
+// as well, but a turn of a degree moves them by a centimetre or two.
+TEST(LocalizerTest, AFitThatDoesNotKnowTheHeadingToADegreeIsNotSure) {
+  const std::shared_ptr<const PreparedMap> room = PreparePlace(RoomWalls(12.0, 8.0), kOptions).map;
+  LocalMap corner;
+  for (const Point2& p : RoomWalls(12.0, 8.0).points) {
+    if (p.x <= -5.0 && p.y <= -3.0) corner.points.push_back(p);  // 1 m of each wall at (-6, -4)
+  }
+  ASSERT_GT(corner.points.size(), static_cast<size_t>(kOptions.min_sure_points));
+  const auto covariance_at_truth = [&](const LocalMap& query) {
+    return PoseCovariance(PrepareLocalQuery(query, kOptions).match.points, *room, Pose2{}, kOptions.refine,
+                          kOptions.pose_covariance);
+  };
+  const Eigen::Matrix3d whole = covariance_at_truth(RoomWalls(12.0, 8.0));
+  const Eigen::Matrix3d part = covariance_at_truth(corner);
+  EXPECT_TRUE(PoseKnownToPromise(whole, kOptions.confidence));
+  EXPECT_FALSE(PoseKnownToPromise(part, kOptions.confidence));
+  EXPECT_GT(std::sqrt(part(2, 2)), std::sqrt(whole(2, 2)));
+  ConfidenceOptions unchecked = kOptions.confidence;
+  unchecked.promise_sigmas = 0;
+  EXPECT_TRUE(PoseKnownToPromise(part, unchecked));
 }
 
 // A room pins a pose: any 0.2 m slide moves its cross walls' points away.
