@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/align/icp.h"
 #include "core/align/scan_match.h"
 #include "core/eval/retrieval_metrics.h"
 #include "core/localmap/pose_ops.h"
@@ -89,9 +90,8 @@ AnswerOutcome ScoreAnswer(const Dataset& d, const EvalQuery& q, const Answer& an
     }
   }
   if (answer.pose_covariance) {
-    const Eigen::Matrix3d& c = *answer.pose_covariance;
-    o.position_sd_m = std::sqrt(std::max(0.0, c.topLeftCorner<2, 2>().selfadjointView<Eigen::Lower>().eigenvalues().maxCoeff()));
-    o.heading_sd_deg = std::sqrt(std::max(0.0, c(2, 2))) * 180.0 / M_PI;
+    const PoseDeviations sd = PoseStandardDeviations(*answer.pose_covariance);
+    o.position_sd_m = sd.position_m, o.heading_sd_deg = sd.heading_rad * 180 / M_PI;
   }
   o.top_right = o.pose_known && o.pose_err_m <= kSurePoseM && o.pose_err_deg <= kSurePoseDeg;
   o.localized = answer.localized;

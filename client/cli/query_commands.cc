@@ -13,6 +13,7 @@
 #include "client/cli/output.h"
 #include "client/cli/query_map.h"
 #include "client/cli/result_mcap.h"
+#include "core/align/icp.h"
 #include "core/render/result_svg.h"
 #include "core/util/progress_bar.h"
 #include "proto/convert.h"
@@ -128,13 +129,9 @@ void PrintLocalization(const v1::Localization& l, bool json) {
                 l.collection_pose_map_id().c_str());
   }
   if (l.has_pose_covariance()) {
-    // The position's standard deviation along its least known direction
-    // (the larger eigenvalue of the x-y block), and the heading's.
-    const v1::PoseCovariance& c = l.pose_covariance();
-    const double half_sum = (c.xx() + c.yy()) / 2, half_diff = (c.xx() - c.yy()) / 2;
-    const double worst = std::sqrt(half_sum + std::hypot(half_diff, c.xy()));
-    std::printf("the first hit's pose is known to %.3f m (its least known direction) and %.2f deg (1 sigma)\n", worst,
-                std::sqrt(c.tt()) * 180 / M_PI);
+    const PoseDeviations sd = PoseStandardDeviations(FromProto(l.pose_covariance()));
+    std::printf("the first hit's pose is known to %.3f m (its least known direction) and %.2f deg (1 sigma)\n",
+                sd.position_m, sd.heading_rad * 180 / M_PI);
   }
 }
 

@@ -87,6 +87,13 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
   return pose;
 }
 
+PoseDeviations PoseStandardDeviations(const Eigen::Matrix3d& covariance) {
+  const double half_sum = (covariance(0, 0) + covariance(1, 1)) / 2;
+  const double half_diff = (covariance(0, 0) - covariance(1, 1)) / 2;
+  const double largest = half_sum + std::hypot(half_diff, covariance(0, 1));  // of the 2 x 2 block, symmetric
+  return {std::sqrt(std::max(0.0, largest)), std::sqrt(std::max(0.0, covariance(2, 2)))};
+}
+
 Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
                                const IcpOptions& icp, const PoseCovarianceOptions& options) {
   const Eigen::Vector3d bound(options.max_sigma_m, options.max_sigma_m, options.max_sigma_rad);

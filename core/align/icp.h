@@ -66,6 +66,14 @@ struct PoseCovarianceOptions {
 Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
                                const IcpOptions& icp = {}, const PoseCovarianceOptions& options = {});
 
+// The standard deviations a pose covariance (x, y in m, theta in rad)
+// gives: the position's along its least known direction (the larger
+// eigenvalue of the x-y block) and the heading's.
+struct PoseDeviations {
+  double position_m = 0.0, heading_rad = 0.0;
+};
+PoseDeviations PoseStandardDeviations(const Eigen::Matrix3d& covariance);
+
 struct Overlap {
   double fraction = 0.0;  // inliers / query points; 0 for an empty query or db
   double rms_m = 0.0;     // RMS distance of the inliers to their nearest db point

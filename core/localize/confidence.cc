@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
-
 #include "core/align/icp.h"
 #include "core/localmap/pose_ops.h"
 
@@ -37,11 +35,9 @@ void SetConfidence(Verdict* v, bool has_hits, const ConfidenceOptions& options) 
 
 bool PoseKnownToPromise(const Eigen::Matrix3d& covariance, const ConfidenceOptions& options) {
   if (options.promise_sigmas <= 0) return true;
-  const Eigen::Matrix2d position = covariance.topLeftCorner<2, 2>();
-  const double position_variance = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(position).eigenvalues().maxCoeff();
-  const double heading_sd_deg = std::sqrt(std::max(0.0, covariance(2, 2))) * 180 / M_PI;
-  return options.promise_sigmas * std::sqrt(std::max(0.0, position_variance)) <= options.max_pose_spread_m &&
-         options.promise_sigmas * heading_sd_deg <= options.max_pose_spread_deg;
+  const PoseDeviations sd = PoseStandardDeviations(covariance);
+  return options.promise_sigmas * sd.position_m <= options.max_pose_spread_m &&
+         options.promise_sigmas * sd.heading_rad * 180 / M_PI <= options.max_pose_spread_deg;
 }
 
 double HighestHarmlessRival(double best_score, const ConfidenceOptions& options) {

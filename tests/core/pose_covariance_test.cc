@@ -80,5 +80,18 @@ TEST(PoseCovarianceTest, NothingToFitLeavesTheSearchsReach) {
   }
 }
 
+// The position's deviation is along its least known direction, whichever
+// way that lies: 8 cm along the diagonal, 1 cm across it.
+TEST(PoseCovarianceTest, StandardDeviationsAreAlongTheLeastKnownDirection) {
+  Eigen::Matrix3d c = Eigen::Vector3d(0.08 * 0.08, 0.01 * 0.01, 0.005 * 0.005).asDiagonal();
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  turn.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(M_PI / 4).toRotationMatrix();
+  c = turn * c * turn.transpose();
+  EXPECT_NEAR(std::sqrt(c(0, 0)), 0.057, 0.001);  // either axis alone reads less
+  const PoseDeviations sd = PoseStandardDeviations(c);
+  EXPECT_NEAR(sd.position_m, 0.08, 1e-9);
+  EXPECT_NEAR(sd.heading_rad, 0.005, 1e-12);
+}
+
 }  // namespace
 }  // namespace lmd
