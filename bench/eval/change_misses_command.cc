@@ -173,14 +173,14 @@ void Print(const ChangeCounts& c) {
 }  // namespace
 
 int RunChangeMisses(int argc, char** argv) {
-  Flags args({"log"}, {"global"});
+  Flags args({"log", "max-range"}, {"global"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval change-misses: %s\n", args.error().c_str());
     return 2;
   }
   const LocalizeOptions options;
   std::vector<ChangeCounts> all;
-  const int read = ForEachServedLog(args.GetAll("log"), "change-misses", [&](const Dataset& d) {
+  const int read = ForEachServedLog(args, "change-misses", [&](const Dataset& d) {
     all.push_back(CountChanges(d, options, args.Has("global")));
   });
   if (read != 0) return read;

@@ -111,7 +111,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
 }  // namespace
 
 int RunGlobalMisses(int argc, char** argv) {
-  Flags args({"log", "every"}, {"anchored"});
+  Flags args({"log", "every", "max-range"}, {"anchored"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval global-misses: %s\n", args.error().c_str());
     return 2;
@@ -120,7 +120,7 @@ int RunGlobalMisses(int argc, char** argv) {
   if (!ParseEvery(args, "global-misses", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<MissCounts> all;
-  const int read = ForEachServedLog(args.GetAll("log"), "global-misses", [&](const Dataset& d) {
+  const int read = ForEachServedLog(args, "global-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, args.Has("anchored"), every));
   });
   if (read != 0) return read;

@@ -107,7 +107,7 @@ void Print(const PriorMissCounts& c) {
 }  // namespace
 
 int RunPriorMisses(int argc, char** argv) {
-  Flags args({"log"}, {"one-pose", "no-site", "tracking"});
+  Flags args({"log", "max-range"}, {"one-pose", "no-site", "tracking"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;
@@ -116,7 +116,7 @@ int RunPriorMisses(int argc, char** argv) {
   options.prior_second_pose = !args.Has("one-pose");  // the ablation: each map's first pose only
   if (args.Has("no-site")) options.prior_site_maps = 0;  // the ablation: without the site grid
   std::vector<PriorMissCounts> all;
-  const int read = ForEachServedLog(args.GetAll("log"), "prior-misses", [&](const Dataset& d) {
+  const int read = ForEachServedLog(args, "prior-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, args.Has("tracking") ? kTrackingPrior : kRoughPrior));
   });
   if (read != 0) return read;

@@ -113,7 +113,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
 }  // namespace
 
 int RunSequenceMisses(int argc, char** argv) {
-  Flags args({"log", "every"}, {"list"});
+  Flags args({"log", "every", "max-range"}, {"list"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval sequence-misses: %s\n", args.error().c_str());
     return 2;
@@ -122,7 +122,7 @@ int RunSequenceMisses(int argc, char** argv) {
   if (!ParseEvery(args, "sequence-misses", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<MissCounts> all;
-  const int read = ForEachServedLog(args.GetAll("log"), "sequence-misses", [&](const Dataset& d) {
+  const int read = ForEachServedLog(args, "sequence-misses", [&](const Dataset& d) {
     all.push_back(CountMisses(d, options, every, args.Has("list")));
   });
   if (read != 0) return read;

@@ -17,16 +17,21 @@ std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& opt
   return stored;
 }
 
-int ForEachServedLog(const std::vector<std::string>& named, const std::string& command,
-                     const std::function<void(const Dataset&)>& count) {
+int ForEachServedLog(Flags& args, const std::string& command, const std::function<void(const Dataset&)>& count) {
+  double max_range = 0.0;
+  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range)) {
+    std::fprintf(stderr, "lmd-eval %s: %s\n", command.c_str(), args.error().c_str());
+    return 2;
+  }
   std::string no_logs;
-  const std::vector<std::string> logs = LogsToMeasure(named, &no_logs);
+  const std::vector<std::string> logs = LogsToMeasure(args.GetAll("log"), &no_logs);
   if (logs.empty()) {
     std::fprintf(stderr, "lmd-eval %s: %s\n", command.c_str(), no_logs.c_str());
     return 2;
   }
   DatasetOptions dataset_options;
   dataset_options.every_map = true;  // as lmd-eval served: every map is a query
+  dataset_options.max_range_m = static_cast<float>(max_range);
   for (const std::string& log : logs) {
     Result<Dataset> d = LoadDataset(log, dataset_options);
     if (!d.ok()) {

@@ -22,12 +22,12 @@ struct StoredLog {
 // Every map of `d` stored; `anchored`: each at its log pose (a site map).
 std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& options, bool anchored);
 
-// The logs named (or ../shared/data's), each loaded with every map a query
-// (as lmd-eval served asks them) and handed to `count` in turn. The exit
-// code: 0, 2 when no log is named or found, 1 when one cannot be read (one
-// line on stderr, prefixed "lmd-eval `command`: ").
-int ForEachServedLog(const std::vector<std::string>& named, const std::string& command,
-                     const std::function<void(const Dataset&)>& count);
+// The logs `args` names with --log (or ../shared/data's), each loaded with
+// every map a query (as lmd-eval served asks them; --max-range M as
+// served's) and handed to `count` in turn. The exit code: 0, 2 when no log
+// is named or found or --max-range is not a range, 1 when a log cannot be
+// read (one line on stderr, prefixed "lmd-eval `command`: ").
+int ForEachServedLog(Flags& args, const std::string& command, const std::function<void(const Dataset&)>& count);
 
 // --every N (default 1): every Nth query. False, with one line on stderr
 // prefixed "lmd-eval `command`: ", when it is not a number of 1 or more.

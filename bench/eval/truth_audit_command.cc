@@ -141,7 +141,7 @@ void Print(const AuditCounts& c) {
 }  // namespace
 
 int RunTruthAudit(int argc, char** argv) {
-  Flags args({"log", "every"}, {"list"});
+  Flags args({"log", "every", "max-range"}, {"list"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval truth-audit: %s\n", args.error().c_str());
     return 2;
@@ -150,7 +150,7 @@ int RunTruthAudit(int argc, char** argv) {
   if (!ParseEvery(args, "truth-audit", &every)) return 2;
   const LocalizeOptions options;  // lmdd's defaults
   std::vector<AuditCounts> all;
-  const int read = ForEachServedLog(args.GetAll("log"), "truth-audit", [&](const Dataset& d) {
+  const int read = ForEachServedLog(args, "truth-audit", [&](const Dataset& d) {
     all.push_back(Audit(d, options, every, args.Has("list")));
   });
   if (read != 0) return read;
