@@ -69,6 +69,20 @@ Result<LaserLog> ReadTruthBag(const std::string& path, const DatasetOptions& opt
   return ReadBagLaserLog(path, bag);
 }
 
+// Every return (a reading below the scan's max_range) moved by Gaussian
+// noise of `sigma_m`, kept at 1 cm at the least and below max_range.
+void AddRangeNoise(double sigma_m, uint64_t seed, LaserLog* log) {
+  std::mt19937_64 rng(seed ^ 0x6e6f697365ULL);  // "noise"
+  std::normal_distribution<double> noise(0.0, sigma_m);
+  for (Scan& scan : log->scans) {
+    for (float& r : scan.ranges) {
+      if (!(r < scan.max_range)) continue;
+      const double below_max = std::nextafter(static_cast<double>(scan.max_range), 0.0);
+      r = static_cast<float>(std::clamp(r + noise(rng), 0.01, below_max));
+    }
+  }
+}
+
 }  // namespace
 
 Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options) {
@@ -79,6 +93,7 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
   if (options.max_range_m > 0) carmen.max_usable_range = options.max_range_m;
   Result<LaserLog> log = IsBagPath(log_path) ? ReadTruthBag(log_path, options) : ReadCarmenLog(log_path, carmen);
   if (!log.ok()) return log.status();
+  if (options.range_noise_m > 0) AddRangeNoise(options.range_noise_m, options.seed, &*log);
   LocalMapOptions lm;
   lm.id_prefix = d.name;
   d.maps = BuildLocalMaps(*log, lm);

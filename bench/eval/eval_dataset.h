@@ -65,6 +65,9 @@ struct DatasetOptions {
   // or beyond it are no return), as a robot with a shorter-range sensor than
   // the logs' would see the same place. 0: the readers' default (30 m).
   float max_range_m = 0.0f;
+  // m, > 0: Gaussian noise of this standard deviation added to every
+  // return (seeded by `seed`), as a noisier laser than the logs' would read.
+  double range_noise_m = 0.0;
 };
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

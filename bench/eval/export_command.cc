@@ -25,20 +25,21 @@
 namespace lmd::eval {
 
 int RunExport(int argc, char** argv) {
-  Flags args({"log", "out", "max-range"});
+  Flags args({"log", "out", "max-range", "range-noise"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
   }
   std::vector<std::string> logs = args.GetAll("log");
   const std::string out = args.Get("out");
-  double max_range = 0.0;
-  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range)) {
+  double max_range = 0.0, range_noise = 0.0;
+  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) ||
+      !args.Number("range-noise", 0.0, 1.0, 0.0, &range_noise)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
   }
   if (logs.empty() || out.empty()) {
-    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR [--max-range M]\n");
+    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR [--max-range M] [--range-noise S]\n");
     return 2;
   }
   std::error_code ec;
@@ -46,6 +47,7 @@ int RunExport(int argc, char** argv) {
   for (const std::string& log : logs) {
     DatasetOptions o;
     o.max_range_m = static_cast<float>(max_range);
+    o.range_noise_m = range_noise;
     Result<Dataset> d = LoadDataset(log, o);
     if (!d.ok()) {
       std::fprintf(stderr, "lmd-eval export: %s\n", d.status().ToString().c_str());

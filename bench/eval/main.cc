@@ -25,7 +25,7 @@ void Usage(std::FILE* out) {
                "      queries of the nine logs take about 36 min on 2 cores, --max-queries 25 about 3.5 min.\n"
                "  served [--log FILE...] [--out DIR] [--server HOST:PORT | --lmdd PATH] [--seed N]\n"
                "         [--max-queries N] [--threads N] [--verify N] [--tuned-on a,b] [--no-changes]\n"
-               "         [--mode global|prior|tracking|sequence] [--anchor] [--max-range M]\n"
+               "         [--mode global|prior|tracking|sequence] [--anchor] [--max-range M] [--range-noise S]\n"
                "      the protocol through a live lmdd (started on a temporary store unless --server): every\n"
                "      map inserted, then queried with its 10 m neighbours excluded (Retrieve) and with a\n"
                "      simulated change (DetectChanges); writes DIR/results.json, report.md, queries.csv,\n"
@@ -36,7 +36,8 @@ void Usage(std::FILE* out) {
                "      --mode sequence: with the 2 maps 5 and 10 m before it and noisy odometry to them (the\n"
                "      maps within 10 m of each excluded);\n"
                "      all three (and --anchor) insert every map with its log pose as pose_hint;\n"
-               "      --max-range M: the logs read as by a laser that reaches M m (beyond: no return).\n"
+               "      --max-range M: the logs read as by a laser that reaches M m (beyond: no return);\n"
+               "      --range-noise S: Gaussian noise of S m added to every return (seeded by --seed).\n"
                "  prior-misses [--log FILE...] [--one-pose] [--tracking] [--max-range M]\n"
                "      in process, the --mode prior queries whose top hit misses the place, by why: a map of\n"
                "      the place lmdd did not verify, out-scored by another hit, or matched away from the truth\n"
@@ -68,7 +69,7 @@ void Usage(std::FILE* out) {
                "      (--svg: the fitted one's reliability diagram, a line per run).\n"
                "  A --log may be a bag (MCAP, rosbag2 directory or .db3, ROS 1 .bag) with --truth-frame FRAME\n"
                "  (its ground truth in tf, e.g. map) or --truth-odom TOPIC (a nav_msgs/Odometry topic).\n"
-               "  export --log FILE... --out DIR [--max-range M]\n"
+               "  export --log FILE... --out DIR [--max-range M] [--range-noise S]\n"
                "      local maps (own frame points, trajectory) and ground truth as plain text.\n");
 }
 

@@ -281,7 +281,8 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     if (options.changes) changed.push_back(r.changed);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,%.4f,%.4f,%.3f,%.4f,%.3f\n",
+                  "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,"
+                  "%.4f,%.4f,%.3f,%.4f,%.3f\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
@@ -307,7 +308,9 @@ std::string Now() {
 }  // namespace
 
 int RunServed(int argc, char** argv) {
-  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame", "truth-odom", "tuned-on", "max-range"}, {"no-changes", "anchor"});
+  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame",
+              "truth-odom", "tuned-on", "max-range", "range-noise"},
+             {"no-changes", "anchor"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
@@ -319,7 +322,9 @@ int RunServed(int argc, char** argv) {
   dataset.truth_odom = args.Get("truth-odom");
   uint64_t max_queries = 0, threads = 1, verify = 0;
   double max_range = 0.0;
-  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
+  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) ||
+      !args.Number("range-noise", 0.0, 1.0, 0.0, &dataset.range_noise_m) ||
+      !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
       !args.Count("verify", 0, 1000000, 0, &verify) || !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;

@@ -1,0 +1,41 @@
+#!/bin/sh
+# lmd-eval reads a log as a shorter-range or noisier laser would see it
+# (--max-range, --range-noise): a robot drives 8 m along x past a wall 2 m
+# to its right and one 8 m to its left. Read as it is, its maps hold both
+# walls; read with --max-range 5, the far wall's returns are no returns and
+# the near wall's within 5 m are left; with --range-noise 0.05, the near
+# wall's points spread across it by a few centimetres (the noise is along
+# each beam).
+# usage: sensor_test.sh LMD_EVAL WORKDIR
+set -eu
+eval_bin=$1
+work=$2
+rm -rf "$work" && mkdir -p "$work"
+awk 'BEGIN {
+  for (i = 0; i < 40; i++) {
+    line = "FLASER 180"
+    for (b = 0; b < 180; b++) {  # beams from the right (-89.5 deg) to the left (+89.5 deg) of the heading
+      s = sin((b + 0.5 - 90) * 3.14159265 / 180)
+      r = s < 0 ? -2 / s : 8 / s  # the wall y = -2 on the right, y = 8 on the left
+      line = line " " (r < 30 ? sprintf("%.3f", r) : "30.0")
+    }
+    x = i * 0.2
+    printf "%s %.2f 0 0 %.2f 0 0 0 host 0\n", line, x, x
+  }
+}' > "$work/corridor.log"
+"$eval_bin" export --log "$work/corridor.log" --out "$work/full" 2> /dev/null
+"$eval_bin" export --log "$work/corridor.log" --max-range 5 --out "$work/short" 2> /dev/null
+far_full=$(awk '$1 == "P" && $3 > 5' "$work/full/corridor.maps.txt" | wc -l)
+near_full=$(awk '$1 == "P" && $3 < 0' "$work/full/corridor.maps.txt" | wc -l)
+far_short=$(awk '$1 == "P" && $3 > 5' "$work/short/corridor.maps.txt" | wc -l)
+near_short=$(awk '$1 == "P" && $3 < 0' "$work/short/corridor.maps.txt" | wc -l)
+"$eval_bin" export --log "$work/corridor.log" --range-noise 0.05 --out "$work/noisy" 2> /dev/null
+spread() {  # standard deviation of the near wall's y, in whole cm
+  awk '$1 == "P" && $3 < 0 { n++; s += $3; ss += $3 * $3 } END { printf "%d", 100 * sqrt(ss / n - (s / n) ^ 2) }' "$1"
+}
+spread_full=$(spread "$work/full/corridor.maps.txt")
+spread_noisy=$(spread "$work/noisy/corridor.maps.txt")
+echo "far wall points: $far_full as recorded, $far_short at 5 m; near wall: $near_full and $near_short"
+echo "near wall spread: $spread_full cm as recorded, $spread_noisy cm with 5 cm of noise"
+[ "$far_full" -gt 0 ] && [ "$near_full" -gt 0 ] && [ "$far_short" -eq 0 ] && [ "$near_short" -gt 0 ] &&
+  [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ]
