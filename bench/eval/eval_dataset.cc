@@ -75,15 +75,24 @@ void AddRangeNoise(double sigma_m, uint64_t seed, LaserLog* log) {
   std::mt19937_64 rng(seed ^ 0x6e6f697365ULL);  // "noise"
   std::normal_distribution<double> noise(0.0, sigma_m);
   for (Scan& scan : log->scans) {
+    const double below_max = std::nextafter(static_cast<double>(scan.max_range), 0.0);
     for (float& r : scan.ranges) {
-      if (!(r < scan.max_range)) continue;
-      const double below_max = std::nextafter(static_cast<double>(scan.max_range), 0.0);
-      r = static_cast<float>(std::clamp(r + noise(rng), 0.01, below_max));
+      if (r < scan.max_range) r = static_cast<float>(std::clamp(r + noise(rng), 0.01, below_max));
     }
   }
 }
 
 }  // namespace
+
+bool SensorFromFlags(Flags& args, DatasetOptions* options) {
+  double max_range = 0.0;
+  if (!args.Number("max-range", 1.0, CarmenReadOptions().max_usable_range, 0.0, &max_range) ||
+      !args.Number("range-noise", 0.0, 1.0, 0.0, &options->range_noise_m)) {
+    return false;
+  }
+  options->max_range_m = static_cast<float>(max_range);
+  return true;
+}
 
 Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options) {
   const auto start = std::chrono::steady_clock::now();

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/common/flags.h"
 #include "core/eval/ground_truth.h"
 #include "core/eval/point_grid.h"
 #include "core/sim/change.h"
@@ -48,7 +49,7 @@ struct Dataset {
 };
 
 struct DatasetOptions {
-  uint64_t seed = 1;              // simulated changes: one rng per query from (seed, dataset, query)
+  uint64_t seed = 1;  // simulated changes (one rng per query from seed, dataset, query) and range noise
   double place_radius_m = 0.3;    // place truth: query points within this of the map's
   double place_min_overlap = 0.5; //   ... at least this fraction
   int threads = 2;
@@ -64,11 +65,17 @@ struct DatasetOptions {
   // m, > 0: the laser taken as one that reaches only this far (readings at
   // or beyond it are no return), as a robot with a shorter-range sensor than
   // the logs' would see the same place. 0: the readers' default (30 m).
+  // Not beyond it: the logs' no-return codes (32.8-81.9 m) would read as walls.
   float max_range_m = 0.0f;
   // m, > 0: Gaussian noise of this standard deviation added to every
   // return (seeded by `seed`), as a noisier laser than the logs' would read.
   double range_noise_m = 0.0;
 };
+
+// --max-range M (1-30 m) and --range-noise S (0-1 m) from `args` into
+// `options`; false, with args.error() saying what is wrong, when either is
+// out of range.
+bool SensorFromFlags(Flags& args, DatasetOptions* options);
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth
 // and simulated changes. IoError etc. from the reader.

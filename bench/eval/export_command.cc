@@ -32,9 +32,8 @@ int RunExport(int argc, char** argv) {
   }
   std::vector<std::string> logs = args.GetAll("log");
   const std::string out = args.Get("out");
-  double max_range = 0.0, range_noise = 0.0;
-  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) ||
-      !args.Number("range-noise", 0.0, 1.0, 0.0, &range_noise)) {
+  DatasetOptions sensor;
+  if (!SensorFromFlags(args, &sensor)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
   }
@@ -45,10 +44,7 @@ int RunExport(int argc, char** argv) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   for (const std::string& log : logs) {
-    DatasetOptions o;
-    o.max_range_m = static_cast<float>(max_range);
-    o.range_noise_m = range_noise;
-    Result<Dataset> d = LoadDataset(log, o);
+    Result<Dataset> d = LoadDataset(log, sensor);
     if (!d.ok()) {
       std::fprintf(stderr, "lmd-eval export: %s\n", d.status().ToString().c_str());
       return 1;

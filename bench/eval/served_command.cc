@@ -321,15 +321,11 @@ int RunServed(int argc, char** argv) {
   dataset.truth_frame = args.Get("truth-frame");
   dataset.truth_odom = args.Get("truth-odom");
   uint64_t max_queries = 0, threads = 1, verify = 0;
-  double max_range = 0.0;
-  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range) ||
-      !args.Number("range-noise", 0.0, 1.0, 0.0, &dataset.range_noise_m) ||
-      !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
+  if (!SensorFromFlags(args, &dataset) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
       !args.Count("verify", 0, 1000000, 0, &verify) || !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }
-  dataset.max_range_m = static_cast<float>(max_range);
   options.max_queries = static_cast<size_t>(max_queries);
   options.threads = static_cast<int>(threads);
   options.verify = static_cast<uint32_t>(verify);

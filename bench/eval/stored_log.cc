@@ -18,8 +18,9 @@ std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& opt
 }
 
 int ForEachServedLog(Flags& args, const std::string& command, const std::function<void(const Dataset&)>& count) {
-  double max_range = 0.0;
-  if (!args.Number("max-range", 1.0, 1000.0, 0.0, &max_range)) {
+  DatasetOptions dataset_options;
+  dataset_options.every_map = true;  // as lmd-eval served: every map is a query
+  if (!SensorFromFlags(args, &dataset_options)) {
     std::fprintf(stderr, "lmd-eval %s: %s\n", command.c_str(), args.error().c_str());
     return 2;
   }
@@ -29,9 +30,6 @@ int ForEachServedLog(Flags& args, const std::string& command, const std::functio
     std::fprintf(stderr, "lmd-eval %s: %s\n", command.c_str(), no_logs.c_str());
     return 2;
   }
-  DatasetOptions dataset_options;
-  dataset_options.every_map = true;  // as lmd-eval served: every map is a query
-  dataset_options.max_range_m = static_cast<float>(max_range);
   for (const std::string& log : logs) {
     Result<Dataset> d = LoadDataset(log, dataset_options);
     if (!d.ok()) {
