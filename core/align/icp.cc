@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -88,6 +89,10 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
 }
 
 PoseDeviations PoseStandardDeviations(const Eigen::Matrix3d& covariance) {
+  if (!covariance.allFinite()) {
+    const double unknown = std::numeric_limits<double>::infinity();
+    return {unknown, unknown};
+  }
   const double half_sum = (covariance(0, 0) + covariance(1, 1)) / 2;
   const double half_diff = (covariance(0, 0) - covariance(1, 1)) / 2;
   const double largest = half_sum + std::hypot(half_diff, covariance(0, 1));  // of the 2 x 2 block, symmetric

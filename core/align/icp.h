@@ -68,7 +68,8 @@ Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const Pr
 
 // The standard deviations a pose covariance (x, y in m, theta in rad)
 // gives: the position's along its least known direction (the larger
-// eigenvalue of the x-y block) and the heading's.
+// eigenvalue of the x-y block) and the heading's; infinite for a covariance
+// that is not finite.
 struct PoseDeviations {
   double position_m = 0.0, heading_rad = 0.0;
 };

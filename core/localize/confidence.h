@@ -107,8 +107,11 @@ struct ConfidenceOptions {
   // of heading) at least this many standard deviations of the answer's pose
   // covariance (Verdict::pose_covariance, PoseCovariance in icp.h; 0: off).
   // Not fitted: 2.81 is the two-sided normal quantile of 99.5 %, the share
-  // of sure answers that must be right; the covariance's scale and floor
-  // were fitted on the tuning logs before (PoseCovarianceOptions). It is
+  // of sure answers that must be right, taken per direction (jointly, a
+  // Gaussian error stays within both bounds at least 97.6 % of the time at
+  // the line; the served figures below are what counts); the covariance's
+  // scale and floor were fitted on the tuning logs before
+  // (PoseCovarianceOptions). It is
   // what a shorter-range laser needs: its maps' walls lie close to the
   // robot and pin the heading less, and two walls meeting at a corner fit
   // many places. Served (lmd-eval served, 2026-12-07, one lmdd with and
@@ -189,7 +192,8 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options = {
 
 // True when `covariance` (x, y in m, theta in rad) knows the pose to the
 // promise (max_pose_spread_m, max_pose_spread_deg) at promise_sigmas
-// standard deviations, or when promise_sigmas is 0.
+// standard deviations, or when promise_sigmas is 0. Never for a covariance
+// that is not finite.
 bool PoseKnownToPromise(const Eigen::Matrix3d& covariance, const ConfidenceOptions& options);
 
 // Sets v->confidence from its final best score, rival and verdict

@@ -194,13 +194,13 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->verdict.pose_covariance =
         PoseCovariance(query.match.points, *hits[0].db, hits[0].pose, options.refine, options.pose_covariance);
   }
-  // Nor one whose map does not pin its pose as closely as a sure answer
-  // promises, nor one whose fit does not know it that closely.
+  // Nor one whose fit does not know its pose as closely as a sure answer
+  // promises, nor one whose map does not pin it that closely.
+  if (out->verdict.sure) out->verdict.sure = PoseKnownToPromise(out->verdict.pose_covariance, options.confidence);
   if (out->verdict.sure && options.confidence.min_slide_margin > 0) {
     out->verdict.slide_margin = SlideMargin(query, hits[0], options, options.confidence);
     out->verdict.sure = out->verdict.slide_margin >= options.confidence.min_slide_margin;
   }
-  if (out->verdict.sure) out->verdict.sure = PoseKnownToPromise(out->verdict.pose_covariance, options.confidence);
   SetConfidence(&out->verdict, !hits.empty(), options.confidence);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);

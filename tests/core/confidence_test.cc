@@ -395,6 +395,10 @@ TEST(JudgeTest, APoseIsKnownToThePromiseOnlyAtEnoughSigmas) {
   ConfidenceOptions unchecked;
   unchecked.promise_sigmas = 0;
   EXPECT_TRUE(PoseKnownToPromise(covariance(1.0, 1.0, 10 * degree), unchecked));
+  // A covariance that is not finite knows nothing.
+  Eigen::Matrix3d broken = covariance(0.03, 0.03, 0.3 * degree);
+  broken(0, 1) = broken(1, 0) = std::nan("");
+  EXPECT_FALSE(PoseKnownToPromise(broken, options));
 }
 
 // Hits far below the best (best - agreement_window) are not compared: no

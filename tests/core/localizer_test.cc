@@ -764,9 +764,36 @@ TEST(LocalizerTest, AFitThatDoesNotKnowTheHeadingToADegreeIsNotSure) {
   EXPECT_TRUE(PoseKnownToPromise(whole, kOptions.confidence));
   EXPECT_FALSE(PoseKnownToPromise(part, kOptions.confidence));
   EXPECT_GT(std::sqrt(part(2, 2)), std::sqrt(whole(2, 2)));
+  // Its heading is not known to a degree (nor, through it, the position of
+  // the frame's origin, 7 m from the corner); the room's is.
+  EXPECT_GT(kOptions.confidence.promise_sigmas * PoseStandardDeviations(part).heading_rad * 180 / M_PI,
+            kOptions.confidence.max_pose_spread_deg);
+  EXPECT_LE(kOptions.confidence.promise_sigmas * PoseStandardDeviations(whole).heading_rad * 180 / M_PI,
+            kOptions.confidence.max_pose_spread_deg);
   ConfidenceOptions unchecked = kOptions.confidence;
   unchecked.promise_sigmas = 0;
   EXPECT_TRUE(PoseKnownToPromise(part, unchecked));
+}
+
+// The verdict applies it: demo queries sure by default are not where every
+// fit's heading is taken to be known only to 0.5 deg (2.81 x 0.5 > 1 deg),
+// and are again where the test is off.
+TEST(LocalizerTest, ASureVerdictNeedsItsFitToKnowThePose) {
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);
+  LocalizeOptions vague = kOptions;
+  vague.pose_covariance.floor_sigma_rad = 0.5 * M_PI / 180;
+  LocalizeOptions unchecked = vague;
+  unchecked.confidence.promise_sigmas = 0;
+  size_t sure = 0;
+  for (size_t q = 5; q < DemoMaps().size(); q += 40) {
+    const LocalQuery query = PrepareLocalQuery(MovedDemoMap(q), kOptions);
+    const bool sure_by_default = Localize(query, collection, kOptions).verdict.sure;
+    sure += sure_by_default;
+    EXPECT_FALSE(Localize(query, collection, vague).verdict.sure) << q;
+    EXPECT_EQ(Localize(query, collection, unchecked).verdict.sure, sure_by_default) << q;
+  }
+  EXPECT_GT(sure, 0u);
 }
 
 // A room pins a pose: any 0.2 m slide moves its cross walls' points away.
