@@ -321,8 +321,9 @@ int RunServed(int argc, char** argv) {
   dataset.truth_frame = args.Get("truth-frame");
   dataset.truth_odom = args.Get("truth-odom");
   uint64_t max_queries = 0, threads = 1, verify = 0;
-  if (!SensorFromFlags(args, &dataset) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) || !args.Count("threads", 1, 256, 1, &threads) ||
-      !args.Count("verify", 0, 1000000, 0, &verify) || !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
+  if (!SensorFromFlags(args, &dataset) || !args.Count("max-queries", 0, 1000000000, 0, &max_queries) ||
+      !args.Count("threads", 1, 256, 1, &threads) || !args.Count("verify", 0, 1000000, 0, &verify) ||
+      !args.Count("seed", 0, UINT64_MAX, 1, &dataset.seed)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());
     return 2;
   }

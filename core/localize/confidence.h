@@ -111,10 +111,9 @@ struct ConfidenceOptions {
   // Gaussian error stays within both bounds at least 97.6 % of the time at
   // the line; the served figures below are what counts); the covariance's
   // scale and floor were fitted on the tuning logs before
-  // (PoseCovarianceOptions). It is
-  // what a shorter-range laser needs: its maps' walls lie close to the
-  // robot and pin the heading less, and two walls meeting at a corner fit
-  // many places. Served (lmd-eval served, 2026-12-07, one lmdd with and
+  // (PoseCovarianceOptions). It is what a shorter-range laser needs: its
+  // maps' walls lie close to the robot and pin the heading less, and two
+  // walls meeting at a corner fit many places. Served (lmd-eval served, 2026-12-07, one lmdd with and
   // without; held out, mean over logs): global sure 0.385 -> 0.352 of the
   // answers, right 99.30 -> 99.84 % (5 -> 1 wrong; tuning logs 2 -> 0);
   // tracking priors 0.552 -> 0.492, 99.54 -> 99.90 % (10 -> 4); loose
