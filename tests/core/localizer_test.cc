@@ -748,7 +748,7 @@ TEST(LocalizerTest, AMapThatExplainsTheQueryCloselyRanksAboveALookAlikeThatExpla
 // a whole room's walls know the heading; the two short walls of one of its
 // corners, as a laser of a few metres' range sees them, fit at the true pose
 // as well, but a turn of a degree moves them by a centimetre or two.
-TEST(LocalizerTest, AFitThatDoesNotKnowTheHeadingToADegreeIsNotSure) {
+TEST(LocalizerTest, ACornerAloneDoesNotKnowItsHeadingToADegree) {
   const std::shared_ptr<const PreparedMap> room = PreparePlace(RoomWalls(12.0, 8.0), kOptions).map;
   LocalMap corner;
   for (const Point2& p : RoomWalls(12.0, 8.0).points) {
