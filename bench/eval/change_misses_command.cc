@@ -173,7 +173,7 @@ void Print(const ChangeCounts& c) {
 }  // namespace
 
 int RunChangeMisses(int argc, char** argv) {
-  Flags args({"log", "max-range", "range-noise"}, {"global"});
+  Flags args(WithSensorFlags({"log"}), {"global"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval change-misses: %s\n", args.error().c_str());
     return 2;

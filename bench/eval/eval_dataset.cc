@@ -13,6 +13,7 @@
 #include "core/io/carmen_reader.h"
 #include "core/localmap/local_map_builder.h"
 #include "core/localmap/pose_ops.h"
+#include "core/sim/odometry_drift.h"
 #include "core/util/progress_bar.h"
 
 namespace lmd::eval {
@@ -82,12 +83,30 @@ void AddRangeNoise(double sigma_m, uint64_t seed, LaserLog* log) {
   }
 }
 
+// Each map as built on drifting odometry (one rng per map, from the seed,
+// the dataset and the map's index).
+void DriftMaps(double deg_per_m, uint64_t seed, std::vector<LocalMap>* maps) {
+  OdometryDrift drift;
+  drift.heading_rad_per_m = deg_per_m * M_PI / 180;
+  const double dedup_cell_m = LocalMapOptions().dedup_cell_m;
+  for (size_t i = 0; i < maps->size(); ++i) {
+    std::mt19937_64 rng(seed ^ 0x6472696674ULL ^ (0x9E3779B97F4A7C15ULL * (i + 1)));  // "drift"
+    (*maps)[i] = WithDriftedOdometry(std::move((*maps)[i]), drift, dedup_cell_m, rng);
+  }
+}
+
 }  // namespace
+
+std::vector<std::string> WithSensorFlags(std::vector<std::string> valued) {
+  for (const char* flag : {"max-range", "range-noise", "map-drift"}) valued.push_back(flag);
+  return valued;
+}
 
 bool SensorFromFlags(Flags& args, DatasetOptions* options) {
   double max_range = 0.0;
   if (!args.Number("max-range", 1.0, CarmenReadOptions().max_usable_range, 0.0, &max_range) ||
-      !args.Number("range-noise", 0.0, 1.0, 0.0, &options->range_noise_m)) {
+      !args.Number("range-noise", 0.0, 1.0, 0.0, &options->range_noise_m) ||
+      !args.Number("map-drift", 0.0, 10.0, 0.0, &options->map_drift_deg_per_m)) {
     return false;
   }
   options->max_range_m = static_cast<float>(max_range);
@@ -121,6 +140,8 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
     }
     grids[i] = PointGrid(global[i], options.place_radius_m);
   });
+  // The robots' maps; the truth above stays the logs'.
+  if (options.map_drift_deg_per_m > 0) DriftMaps(options.map_drift_deg_per_m, options.seed ^ Fnv1a(d.name), &d.maps);
 
   std::vector<RelevantPair> asked = pairs;
   if (options.every_map) {

@@ -70,11 +70,21 @@ struct DatasetOptions {
   // m, > 0: Gaussian noise of this standard deviation added to every
   // return (seeded by `seed`), as a noisier laser than the logs' would read.
   double range_noise_m = 0.0;
+  // deg per m, > 0: every local map (stored and queried alike) built on
+  // odometry that drifts within it, as a robot without a scan matcher builds
+  // its maps: a heading rate of up to this and a length error of up to 2 %,
+  // drawn once per map (WithDriftedOdometry, seeded by `seed`). Place truth,
+  // relevant pairs and the maps' frames stay those of the logs' poses.
+  double map_drift_deg_per_m = 0.0;
 };
 
-// --max-range M (1-30 m) and --range-noise S (0-1 m) from `args` into
-// `options`; false, with args.error() saying what is wrong, when either is
-// out of range.
+// `valued` with the flags SensorFromFlags reads, for the commands that load
+// datasets.
+std::vector<std::string> WithSensorFlags(std::vector<std::string> valued);
+
+// --max-range M (1-30 m), --range-noise S (0-1 m) and --map-drift D (0-10
+// deg per m) from `args` into `options`; false, with args.error() saying
+// what is wrong, when one is out of range.
 bool SensorFromFlags(Flags& args, DatasetOptions* options);
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

@@ -25,7 +25,7 @@
 namespace lmd::eval {
 
 int RunExport(int argc, char** argv) {
-  Flags args({"log", "out", "max-range", "range-noise"});
+  Flags args(WithSensorFlags({"log", "out"}));
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval export: %s\n", args.error().c_str());
     return 2;
@@ -38,7 +38,7 @@ int RunExport(int argc, char** argv) {
     return 2;
   }
   if (logs.empty() || out.empty()) {
-    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR [--max-range M] [--range-noise S]\n");
+    std::fprintf(stderr, "usage: lmd-eval export --log FILE... --out DIR [sensor flags]\n");
     return 2;
   }
   std::error_code ec;

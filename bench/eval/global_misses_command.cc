@@ -111,7 +111,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, bool an
 }  // namespace
 
 int RunGlobalMisses(int argc, char** argv) {
-  Flags args({"log", "every", "max-range", "range-noise"}, {"anchored"});
+  Flags args(WithSensorFlags({"log", "every"}), {"anchored"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval global-misses: %s\n", args.error().c_str());
     return 2;

@@ -107,7 +107,7 @@ void Print(const PriorMissCounts& c) {
 }  // namespace
 
 int RunPriorMisses(int argc, char** argv) {
-  Flags args({"log", "max-range", "range-noise"}, {"one-pose", "no-site", "tracking"});
+  Flags args(WithSensorFlags({"log"}), {"one-pose", "no-site", "tracking"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval prior-misses: %s\n", args.error().c_str());
     return 2;

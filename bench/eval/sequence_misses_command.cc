@@ -113,7 +113,7 @@ MissCounts CountMisses(const Dataset& d, const LocalizeOptions& options, size_t 
 }  // namespace
 
 int RunSequenceMisses(int argc, char** argv) {
-  Flags args({"log", "every", "max-range", "range-noise"}, {"list"});
+  Flags args(WithSensorFlags({"log", "every"}), {"list"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval sequence-misses: %s\n", args.error().c_str());
     return 2;

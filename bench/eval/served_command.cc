@@ -308,8 +308,8 @@ std::string Now() {
 }  // namespace
 
 int RunServed(int argc, char** argv) {
-  Flags args({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed", "truth-frame",
-              "truth-odom", "tuned-on", "max-range", "range-noise"},
+  Flags args(WithSensorFlags({"log", "out", "mode", "lmdd", "server", "threads", "max-queries", "verify", "seed",
+                              "truth-frame", "truth-odom", "tuned-on"}),
              {"no-changes", "anchor"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval served: %s\n", args.error().c_str());

@@ -23,8 +23,8 @@ struct StoredLog {
 std::unique_ptr<StoredLog> StoreLog(const Dataset& d, const LocalizeOptions& options, bool anchored);
 
 // The logs `args` names with --log (or ../shared/data's), each loaded with
-// every map a query (as lmd-eval served asks them; --max-range and
-// --range-noise as served's) and handed to `count` in turn. The exit code:
+// every map a query (as lmd-eval served asks them; the sensor flags as
+// served's) and handed to `count` in turn. The exit code:
 // 0, 2 when no log is named or found or a flag is out of range, 1 when a
 // log cannot be read (one line on stderr, prefixed "lmd-eval `command`: ").
 int ForEachServedLog(Flags& args, const std::string& command, const std::function<void(const Dataset&)>& count);

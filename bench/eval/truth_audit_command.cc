@@ -141,7 +141,7 @@ void Print(const AuditCounts& c) {
 }  // namespace
 
 int RunTruthAudit(int argc, char** argv) {
-  Flags args({"log", "every", "max-range", "range-noise"}, {"list"});
+  Flags args(WithSensorFlags({"log", "every"}), {"list"});
   if (!args.Parse(argc, argv)) {
     std::fprintf(stderr, "lmd-eval truth-audit: %s\n", args.error().c_str());
     return 2;

@@ -1,11 +1,14 @@
 #!/bin/sh
 # lmd-eval reads a log as a shorter-range or noisier laser would see it
-# (--max-range, --range-noise): a robot drives 8 m along x past a wall 2 m
+# (--max-range, --range-noise), and its maps as a robot on drifting odometry
+# would build them (--map-drift): a robot drives 8 m along x past a wall 2 m
 # to its right and one 8 m to its left. Read as it is, its maps hold both
 # walls; read with --max-range 5, the far wall's returns are no returns and
 # the near wall's within 5 m are left; with --range-noise 0.05, the near
 # wall's points spread across it by a few centimetres (the noise is along
-# each beam).
+# each beam); with --map-drift 2, each map's near wall beside its route
+# bends away from y = -2 by tens of centimetres at its far end, while the
+# maps' frames and the place truth stay the log's.
 # usage: sensor_test.sh LMD_EVAL WORKDIR
 set -eu
 eval_bin=$1
@@ -35,7 +38,18 @@ spread() {  # standard deviation of the near wall's y, in whole cm
 }
 spread_full=$(spread "$work/full/corridor.maps.txt")
 spread_noisy=$(spread "$work/noisy/corridor.maps.txt")
+"$eval_bin" export --log "$work/corridor.log" --map-drift 2 --out "$work/drift" 2> /dev/null
+bend() {  # the largest distance from y = -2 of a near-wall point beside the 5 m a map drove, in whole cm
+  awk '$1 == "P" && $3 < 0 && $2 >= 0 && $2 <= 5 { d = $3 + 2; if (d < 0) d = -d; if (d > m) m = d } END { printf "%d", 100 * m }' "$1"
+}
+frames() { awk '$1 == "MAP" { print $8, $9, $10 }' "$1"; }
+bend_full=$(bend "$work/full/corridor.maps.txt")
+bend_drift=$(bend "$work/drift/corridor.maps.txt")
+same_frames=$([ "$(frames "$work/full/corridor.maps.txt")" = "$(frames "$work/drift/corridor.maps.txt")" ] && echo yes || echo no)
+same_truth=$(cmp -s "$work/full/corridor.truth.txt" "$work/drift/corridor.truth.txt" && echo yes || echo no)
+echo "near wall bent by $bend_full cm as recorded, $bend_drift cm on drifting odometry; same frames $same_frames, same truth $same_truth"
 echo "far wall points: $far_full as recorded, $far_short at 5 m; near wall: $near_full and $near_short"
 echo "near wall spread: $spread_full cm as recorded, $spread_noisy cm with 5 cm of noise"
 [ "$far_full" -gt 0 ] && [ "$near_full" -gt 0 ] && [ "$far_short" -eq 0 ] && [ "$near_short" -gt 0 ] &&
-  [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ]
+  [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ] &&
+  [ "$bend_full" -eq 0 ] && [ "$bend_drift" -ge 10 ] && [ "$same_frames" = yes ] && [ "$same_truth" = yes ]
