@@ -48,6 +48,11 @@ struct LocalMap {
   std::vector<Point2> points;    // own frame, m
   std::vector<Pose2> trajectory; // own frame
   std::vector<Scan> scans;       // own frame; may be empty
+  // rad per m travelled, >= 0: how far the trajectory's heading may have
+  // drifted from the truth while the robot drove (its odometry's bound); 0:
+  // a rigid map, as a scan matcher or SLAM builds it. A bent map fits
+  // another rigidly only with its frame turned by part of the bend.
+  double heading_drift_rad_per_m = 0.0;
   EvalTruth truth;               // evaluation only
 };
 

@@ -47,6 +47,7 @@ LocalMap FromProto(const v1::LocalMap& map) {
     s.ranges.assign(scan.ranges().begin(), scan.ranges().end());
     out.scans.push_back(std::move(s));
   }
+  out.heading_drift_rad_per_m = map.heading_drift_rad_per_m();
   return out;
 }
 
@@ -67,6 +68,7 @@ v1::LocalMap ToProto(const LocalMap& map) {
     s->set_max_range(scan.max_range);
     s->mutable_ranges()->Add(scan.ranges.begin(), scan.ranges.end());
   }
+  out.set_heading_drift_rad_per_m(map.heading_drift_rad_per_m);
   return out;
 }
 

@@ -17,6 +17,9 @@ bool AllCharsIn(const std::string& s, const std::string& extra) {
 
 // What a map id is (ValidateMapId); a page token is one too.
 constexpr char kMapIdForm[] = "1 to 128 characters from [A-Za-z0-9._:-]";
+// A bound on odometry's heading drift (LocalMap.heading_drift_rad_per_m):
+// 29 deg per metre is no odometry; beyond it the value is a mistake.
+constexpr double kMaxHeadingDriftRadPerM = 0.5;
 bool IsMapId(const std::string& s) { return !s.empty() && s.size() <= 128 && AllCharsIn(s, "._:-"); }
 
 // "12.5": metres for messages, without trailing zeros.
@@ -94,6 +97,9 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
                                    std::to_string(map.y_size()));
   }
   if (map.x_size() == 0) return Status::InvalidArgument(where + ": the map has no points");
+  if (!(map.heading_drift_rad_per_m() >= 0 && map.heading_drift_rad_per_m() <= kMaxHeadingDriftRadPerM)) {
+    return Status::InvalidArgument(where + ": heading_drift_rad_per_m must be a number from 0 to 0.5 rad per metre");
+  }
   if (static_cast<uint32_t>(map.x_size()) > config.max_points_per_map) {
     return Status::InvalidArgument(where + ": " + std::to_string(map.x_size()) +
                                    " points exceed max_points_per_map (" +

@@ -88,6 +88,12 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
   return pose;
 }
 
+Eigen::Matrix3d BendCovariance(const PreparedMap& query, const PreparedMap& db) {
+  const double position = query.bend_position_sd_m * query.bend_position_sd_m + db.bend_position_sd_m * db.bend_position_sd_m;
+  const double heading = query.bend_heading_sd_rad * query.bend_heading_sd_rad + db.bend_heading_sd_rad * db.bend_heading_sd_rad;
+  return Eigen::Vector3d(position, position, heading).asDiagonal();
+}
+
 PoseDeviations PoseStandardDeviations(const Eigen::Matrix3d& covariance) {
   if (!covariance.allFinite()) {
     const double unknown = std::numeric_limits<double>::infinity();

@@ -66,6 +66,11 @@ struct PoseCovarianceOptions {
 Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const PreparedMap& db, const Pose2& pose,
                                const IcpOptions& icp = {}, const PoseCovarianceOptions& options = {});
 
+// What a fit of `query` on `db` cannot know of the pose because either map
+// bends (PreparedMap::bend_*): both maps' heading and position variances,
+// summed (the position's alike in every direction). Zero for rigid maps.
+Eigen::Matrix3d BendCovariance(const PreparedMap& query, const PreparedMap& db);
+
 // The standard deviations a pose covariance (x, y in m, theta in rad)
 // gives: the position's along its least known direction (the larger
 // eigenvalue of the x-y block) and the heading's; infinite for a covariance

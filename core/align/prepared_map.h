@@ -82,6 +82,10 @@ struct PreparedMap {
   std::vector<Point2> normals;      // unit normal per point; (0, 0) where undefined
   Point2 min_corner, max_corner;    // bounding box of points (own frame)
   double heading = 0.0;             // rad in [0, pi/2): dominant orientation (entropy compass)
+  // How far a rigid fit may put the map's own frame off because its
+  // trajectory bends (LocalMap::heading_drift_rad_per_m; MapBend): standard
+  // deviations of the frame's heading and position, 0 for a rigid map.
+  double bend_heading_sd_rad = 0.0, bend_position_sd_m = 0.0;
 
   // Likelihood pyramid; grid_origin = own-frame position of level-0 cell (0, 0)'s lower-left corner.
   Point2 grid_origin;
@@ -148,6 +152,14 @@ PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedM
 // against is gridded once. A map already complete is returned as it is.
 PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map,
                                 std::optional<double> known_heading = std::nullopt);
+
+// PreparedMap::bend_* of `map`. Its heading drifts at a rate of up to
+// heading_drift_rad_per_m, sign and size unknown (taken as uniform), so
+// over its path of length L its end turns by up to that times L. A rigid
+// fit turns the map to match its middle, leaving the frame, L / 2 from
+// there, turned by about half that: heading sd = rate * L / 2 / sqrt(3);
+// position sd = L / 2 times the heading sd.
+void MapBend(const LocalMap& map, double* heading_sd_rad, double* position_sd_m);
 
 // Index of the map point nearest to p within max_dist_m (<= neighbour_cell_m),
 // or -1 if none. *dist2 (if not null) receives its squared distance.

@@ -193,6 +193,7 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   if (!hits.empty() && hits[0].db) {
     out->verdict.pose_covariance =
         PoseCovariance(query.match.points, *hits[0].db, hits[0].pose, options.refine, options.pose_covariance);
+    if (query.map) out->verdict.pose_covariance += BendCovariance(*query.map, *hits[0].db);
   }
   // Nor one whose fit does not know its pose as closely as a sure answer
   // promises, nor one whose map does not pin it that closely.

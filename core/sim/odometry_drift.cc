@@ -38,6 +38,7 @@ LocalMap WithDriftedOdometry(LocalMap map, const OdometryDrift& drift, double de
     map.trajectory.push_back(drifted);
   }
   map.points = PointsFromScans(map.scans, dedup_cell_m);
+  map.heading_drift_rad_per_m = drift.heading_rad_per_m;
   return map;
 }
 

@@ -26,9 +26,10 @@ Pose2 DriftedOdometry(const Pose2& from_frame, const Pose2& to_frame, double tra
 // both drawn once for the map, as wheels of a slightly wrong size or track
 // turn a straight corridor into an arc. The scans are re-posed on that path,
 // the trajectory is their poses and the points are taken from them again
-// (one per dedup_cell_m, as BuildLocalMaps does). The first pose, the map's
-// own frame, stays exact; so does `truth`. A map without scans has nothing
-// to re-pose and is returned as it is.
+// (one per dedup_cell_m, as BuildLocalMaps does); the map states the bound
+// (heading_drift_rad_per_m), as a robot that knows its odometry would. The
+// first pose, the map's own frame, stays exact; so does `truth`. A map
+// without scans has nothing to re-pose and is returned as it is.
 LocalMap WithDriftedOdometry(LocalMap map, const OdometryDrift& drift, double dedup_cell_m, std::mt19937_64& rng);
 
 // Position uncertainty (m) of a pose carried `travel_m` by such odometry

@@ -796,6 +796,28 @@ TEST(LocalizerTest, ASureVerdictNeedsItsFitToKnowThePose) {
   EXPECT_GT(sure, 0u);
 }
 
+// A query whose robot says its odometry may turn it by 0.5 deg per metre
+// could be bent by a degree or two over its metres of path: no rigid fit
+// knows its frame's heading to a degree, so demo queries sure when rigid
+// are not sure so, and their covariance has grown by the bend.
+TEST(LocalizerTest, AMapThatMayBendIsNotSureToADegree) {
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);
+  size_t sure = 0;
+  for (size_t q = 5; q < DemoMaps().size(); q += 40) {
+    LocalMap bendable = MovedDemoMap(q);
+    const Localization rigid = Localize(PrepareLocalQuery(bendable, kOptions), collection, kOptions);
+    bendable.heading_drift_rad_per_m = 0.5 * M_PI / 180;
+    const Localization bent = Localize(PrepareLocalQuery(bendable, kOptions), collection, kOptions);
+    sure += rigid.verdict.sure;
+    EXPECT_FALSE(bent.verdict.sure) << q;
+    if (rigid.hits.empty()) continue;
+    EXPECT_EQ(bent.hits[0].map_id, rigid.hits[0].map_id) << q;  // the same answer, less sure
+    EXPECT_GT(bent.verdict.pose_covariance(2, 2), rigid.verdict.pose_covariance(2, 2)) << q;
+  }
+  EXPECT_GT(sure, 0u);
+}
+
 // A room pins a pose: any 0.2 m slide moves its cross walls' points away.
 // A corridor whose walls run on past the query's does not: slid along it,
 // every point stays as close. And a sure verdict needs the pose pinned.

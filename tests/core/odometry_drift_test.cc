@@ -73,6 +73,7 @@ TEST(OdometryDriftTest, AMapOnDriftingOdometryBendsFromItsExactFirstPose) {
     ASSERT_EQ(bent.trajectory.size(), truth.trajectory.size());
     EXPECT_EQ(bent.trajectory.front().x, 0.0);
     EXPECT_EQ(bent.trajectory.front().theta, 0.0);
+    EXPECT_EQ(bent.heading_drift_rad_per_m, drift.heading_rad_per_m);  // as a robot that knows its odometry states it
     // One heading rate for the whole map: the last pose has turned by it
     // times the 5 m driven, and every scan sits on the drifted path.
     const double turn = bent.trajectory.back().theta;

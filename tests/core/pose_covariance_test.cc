@@ -93,5 +93,30 @@ TEST(PoseCovarianceTest, StandardDeviationsAreAlongTheLeastKnownDirection) {
   EXPECT_NEAR(sd.heading_rad, 0.005, 1e-12);
 }
 
+// A map driven 4 m (two 2 m legs at a right angle) on odometry that may
+// turn it by 1 deg per metre: its end by up to 4 deg, its frame under a
+// rigid fit by about 2 deg, uniform: sd 2 / sqrt(3) deg; the frame 2 m from
+// the middle moves by 2 m times that. Both maps' bends add up; rigid maps
+// add nothing.
+TEST(PoseCovarianceTest, AMapThatMayBendAddsItsBendToThePose) {
+  LocalMap map = RoomWalls(4.0, 3.0);
+  map.trajectory = {{0, 0, 0}, {2, 0, 0}, {2, 2, M_PI / 2}};
+  const PreparedMap rigid = PrepareMap(map);
+  EXPECT_EQ(rigid.bend_heading_sd_rad, 0.0);
+  map.heading_drift_rad_per_m = M_PI / 180;
+  const PreparedMap bendable = PrepareMap(map);
+  const double heading_sd = 2.0 / std::sqrt(3.0) * M_PI / 180;
+  EXPECT_NEAR(bendable.bend_heading_sd_rad, heading_sd, 1e-12);
+  EXPECT_NEAR(bendable.bend_position_sd_m, 2.0 * heading_sd, 1e-12);
+
+  EXPECT_TRUE(BendCovariance(rigid, rigid).isZero());
+  const Eigen::Matrix3d one = BendCovariance(bendable, rigid), both = BendCovariance(bendable, bendable);
+  EXPECT_NEAR(Sigma(one, 2), heading_sd, 1e-12);
+  EXPECT_NEAR(Sigma(one, 0), 2.0 * heading_sd, 1e-12);
+  EXPECT_NEAR(Sigma(one, 1), 2.0 * heading_sd, 1e-12);
+  EXPECT_NEAR(Sigma(both, 2), std::sqrt(2.0) * heading_sd, 1e-12);
+  EXPECT_TRUE(BendCovariance(rigid, bendable).isApprox(one));
+}
+
 }  // namespace
 }  // namespace lmd

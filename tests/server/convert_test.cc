@@ -16,6 +16,7 @@ TEST(ConvertTest, LocalMapRoundTripsThroughTheWire) {
   scan.max_range = 30.0f;
   scan.ranges = {1.0f, 2.0f, 30.0f};
   map.scans = {scan};
+  map.heading_drift_rad_per_m = 0.004;
 
   const LocalMap back = FromProto(ToProto(map));
   ASSERT_EQ(back.points.size(), 2u);
@@ -27,6 +28,7 @@ TEST(ConvertTest, LocalMapRoundTripsThroughTheWire) {
   EXPECT_EQ(back.scans[0].ranges, scan.ranges);
   EXPECT_FLOAT_EQ(back.scans[0].angle_step, 0.0175f);
   EXPECT_DOUBLE_EQ(back.scans[0].pose.x, 0.5);
+  EXPECT_DOUBLE_EQ(back.heading_drift_rad_per_m, 0.004);
 }
 
 }  // namespace

@@ -342,6 +342,37 @@ TEST_F(MapServiceTest, NanAndInfiniteCoordinatesAreRejectedNamingThePoint) {
   EXPECT_NE(status.error_message().find("point 3 y is infinite"), std::string::npos) << status.error_message();
 }
 
+// A stated odometry drift is stored with the map; one that is not a
+// number from 0 to 0.5 rad per metre is refused, and nothing is stored.
+TEST_F(MapServiceTest, AMapsOdometryDriftIsKeptOrRefusedNamingIt) {
+  TestServer server(dir_.path());
+  ASSERT_TRUE(server.ok());
+  v1::LocalMap drifting = SquareRoomMap();
+  drifting.set_heading_drift_rad_per_m(0.01);
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server.client().InsertMaps(OneMapRequest("site", "m1", drifting), &inserted).ok());
+  v1::GetMapRequest get;
+  get.set_collection("site");
+  get.set_map_id("m1");
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server.client().GetMap(get, &got).ok());
+  EXPECT_EQ(got.map().map().heading_drift_rad_per_m(), 0.01);
+
+  for (double bad : {-0.01, 0.6, std::numeric_limits<double>::quiet_NaN()}) {
+    v1::LocalMap map = SquareRoomMap();
+    map.set_heading_drift_rad_per_m(bad);
+    const grpc::Status status = InsertOne(server, map);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad;
+    EXPECT_NE(status.error_message().find("heading_drift_rad_per_m must be a number from 0 to 0.5"), std::string::npos)
+        << status.error_message();
+  }
+  v1::ListMapsRequest list;
+  list.set_collection("site");
+  v1::ListMapsResponse listed;
+  ASSERT_TRUE(server.client().ListMaps(list, &listed).ok());
+  EXPECT_EQ(listed.maps_size(), 1);
+}
+
 TEST_F(MapServiceTest, BadPosesAndFarCoordinatesAreRejectedNamingTheValue) {
   TestServer server(dir_.path());
   v1::LocalMap far_map = SquareRoomMap();
