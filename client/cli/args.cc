@@ -33,17 +33,22 @@ Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::str
   return args;
 }
 
-Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
+Result<double> GetNumber(const Args& args, const std::string& key, const std::string& unit, double fallback, double lo,
+                         double hi) {
   if (!args.Has(key)) return fallback;
   char* end = nullptr;
   const std::string text = args.Get(key);
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !(value >= lo && value <= hi)) {
     char range[64];
-    std::snprintf(range, sizeof range, " must be a number of metres from %g to %g", lo, hi);
-    return Status::InvalidArgument("--" + key + range + ", got '" + text + "'");
+    std::snprintf(range, sizeof range, " from %g to %g", lo, hi);
+    return Status::InvalidArgument("--" + key + " must be a number of " + unit + range + ", got '" + text + "'");
   }
   return value;
+}
+
+Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi) {
+  return GetNumber(args, key, "metres", fallback, lo, hi);
 }
 
 Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max) {

@@ -29,8 +29,11 @@ Result<Args> ParseArgs(int argc, char** argv, int first, const std::set<std::str
 // The option as a whole number in [1, max], InvalidArgument naming it otherwise.
 Result<long> GetPositive(const Args& args, const std::string& key, long fallback, long max = 1000000);
 
-// The option as a number of metres in [lo, hi], InvalidArgument "--key must be
-// a number of metres from lo to hi, got '...'" otherwise.
+// The option as a number of `unit` in [lo, hi], InvalidArgument "--key must
+// be a number of <unit> from lo to hi, got '...'" otherwise.
+Result<double> GetNumber(const Args& args, const std::string& key, const std::string& unit, double fallback, double lo,
+                         double hi);
+// ... of metres.
 Result<double> GetMetres(const Args& args, const std::string& key, double fallback, double lo, double hi);
 
 // "A,B,C" as finite numbers; InvalidArgument (without naming the option:

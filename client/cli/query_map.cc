@@ -1,6 +1,7 @@
 #include "client/cli/query_map.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <utility>
@@ -49,10 +50,14 @@ Result<LocalMapOptions> LocalMapOptionsFromArgs(const Args& args) {
   // Bounded: a step of 1 nm made ingest build maps for ever.
   Result<double> length = GetMetres(args, "length", options.length_m, 0.5, 100.0);
   Result<double> step = GetMetres(args, "step", options.step_m, 0.1, 100.0);
+  // lmdd takes up to 0.5 rad (28.6 deg) per metre.
+  Result<double> drift = GetNumber(args, "heading-drift", "degrees per metre", 0.0, 0.0, 28.0);
   if (!length.ok()) return length.status();
   if (!step.ok()) return step.status();
+  if (!drift.ok()) return drift.status();
   options.length_m = *length;
   options.step_m = *step;
+  options.heading_drift_rad_per_m = *drift * M_PI / 180;
   return options;
 }
 

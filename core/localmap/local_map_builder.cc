@@ -110,6 +110,7 @@ std::vector<LocalMap> BuildLocalMaps(const LaserLog& log, const LocalMapOptions&
     const size_t index = maps.size();
     map.id = options.id_prefix.empty() ? std::to_string(index)
                                        : options.id_prefix + "-" + std::to_string(index);
+    map.heading_drift_rad_per_m = options.heading_drift_rad_per_m;
     map.truth.global_frame = origin;
     map.truth.travel_start = travel[first];
     map.truth.travel_end = travel[last_excl - 1];

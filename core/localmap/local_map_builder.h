@@ -16,6 +16,10 @@ struct LocalMapOptions {
   double dedup_cell_m = 0.1;  // m; one point kept per cell of this grid
   std::string id_prefix;      // map id = "<id_prefix>-<k>", or "<k>" if empty
   bool keep_scans = true;     // copy the scans (own frame) into each map
+  // Stated on every map (LocalMap::heading_drift_rad_per_m): how far the
+  // log's poses may turn per metre from the truth (0: scan-matched or SLAM
+  // poses, rigid maps; wheel odometry's bound otherwise).
+  double heading_drift_rad_per_m = 0.0;
 };
 
 // Travel = cumulative distance between consecutive scan positions. Map k

@@ -245,6 +245,29 @@ TEST_F(LmdctlLogTest, AStepTooSmallIsRefusedNamingTheRange) {
   }
 }
 
+// --heading-drift states on every map built from the log how far its poses
+// may turn per metre (deg on the command line, rad on the wire); more than
+// lmdd takes is a usage error.
+TEST_F(LmdctlLogTest, IngestStatesTheOdometrysHeadingDriftOnEveryMap) {
+  TestServer server(data_.path());
+  const std::string base = "--server " + server.address() + " ";
+  const std::string log = " --log " + dir_.path() + "/robot.log";
+  CliRun ingest = RunLmdctl(base + "ingest --collection fleet --heading-drift 0.5" + log, dir_);
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.err;
+  v1::GetMapRequest get;
+  get.set_collection("fleet");
+  get.set_map_id("robot-0");
+  v1::GetMapResponse got;
+  ASSERT_TRUE(server.client().GetMap(get, &got).ok());
+  EXPECT_NEAR(got.map().map().heading_drift_rad_per_m(), 0.5 * M_PI / 180, 1e-9);
+
+  CliRun too_much = RunLmdctl(base + "ingest --collection fleet --heading-drift 40" + log, dir_);
+  EXPECT_EQ(too_much.exit_code, 2);
+  EXPECT_EQ(CountLines(too_much.err), 1) << too_much.err;
+  EXPECT_NE(too_much.err.find("--heading-drift must be a number of degrees per metre from 0 to 28"), std::string::npos)
+      << too_much.err;
+}
+
 TEST_F(LmdctlLogTest, IngestPrintsOneIdPerAcknowledgedMapAndTheyAreQueryable) {
   TestServer server(data_.path());
   const std::string base = "--server " + server.address() + " ";
