@@ -97,8 +97,14 @@ Status ValidateLocalMap(const v1::LocalMap& map, const ServerConfig& config, con
                                    std::to_string(map.y_size()));
   }
   if (map.x_size() == 0) return Status::InvalidArgument(where + ": the map has no points");
-  if (!(map.heading_drift_rad_per_m() >= 0 && map.heading_drift_rad_per_m() <= kMaxHeadingDriftRadPerM)) {
-    return Status::InvalidArgument(where + ": heading_drift_rad_per_m must be a number from 0 to 0.5 rad per metre");
+  const double drift = map.heading_drift_rad_per_m();
+  if (!(drift >= 0 && drift <= kMaxHeadingDriftRadPerM)) {
+    return Status::InvalidArgument(where + ": heading_drift_rad_per_m must be a number from 0 to 0.5 rad per metre, " +
+                                   "got " + std::to_string(drift));
+  }
+  if (drift > 0 && map.trajectory_size() == 0 && map.scans_size() == 0) {
+    return Status::InvalidArgument(where + ": heading_drift_rad_per_m needs the map's trajectory or scans (the path "
+                                           "it bends along)");
   }
   if (static_cast<uint32_t>(map.x_size()) > config.max_points_per_map) {
     return Status::InvalidArgument(where + ": " + std::to_string(map.x_size()) +

@@ -46,8 +46,9 @@ constexpr char kUsage[] =
     "matches); --sequence K (with --log / --bag) adds the K maps before --map, --sequence-step maps apart (5), with\n"
     "their relative poses from the route, so that a look-alike place must fit the whole sequence;\n"
     "--length / --step (m) change the local maps built from a log (5 and 1); --heading-drift D (deg per metre)\n"
-    "states on each that its poses may turn by up to D per metre (wheel odometry; lmdd then widens the answer's\n"
-    "covariance by the bend and is sure only where it cannot break 1 deg; default 0: scan-matched or SLAM poses).\n"
+    "states on each map sent (log, bag or --file with poses) that its poses may turn by up to D per metre (wheel\n"
+    "odometry; lmdd then widens the answer's covariance by the bend and is sure only where it cannot break 1 deg;\n"
+    "default 0: scan-matched or SLAM poses).\n"
     "--route (in a cluster) sends calls straight to the collection's primary or an in-sync copy, not via --server.\n"
     "--json prints one JSON object per line. Errors: one line on stderr, exit 1 (2: usage);\n"
     "GRPC_VERBOSITY=ERROR adds gRPC's own log lines (lmdctl keeps them off).\n";
@@ -125,8 +126,8 @@ int Main(int argc, char** argv) {
   const Status known = CheckKnownOptions(
       *args, {"server", "timeout", "token", "tls-ca", "tls-cert", "tls-key", "tls-server-name", "collection", "file",
               "id", "robot", "out", "log", "map", "length", "step", "heading-drift", "top-k", "verify", "method",
-              "exclude", "dir", "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride", "resolution", "prior", "prior-sigma",
-              "sequence", "sequence-step", "copies", "pose"});
+              "exclude", "dir", "bag", "scan-topic", "odom-topic", "frame", "mcap", "yaml", "tile", "stride",
+              "resolution", "prior", "prior-sigma", "sequence", "sequence-step", "copies", "pose"});
   if (!known.ok()) return Fail(known.message(), 2);
   Result<long> timeout = GetPositive(*args, "timeout", 30, 86400);
   if (!timeout.ok()) return Fail(timeout.status().message(), 2);

@@ -3,6 +3,7 @@
 
 #include "client/cli/commands.h"
 #include "client/cli/output.h"
+#include "client/cli/query_map.h"
 #include "client/points_file.h"
 
 namespace lmd::cli {
@@ -11,8 +12,11 @@ int InsertCommand(const CommandContext& ctx) {
   const std::string collection = Required(ctx.args, "collection");
   const std::string file = Required(ctx.args, "file");
   if (collection.empty() || file.empty()) return 2;
+  Result<LocalMapOptions> options = LocalMapOptionsFromArgs(ctx.args);  // --heading-drift
+  if (!options.ok()) return Fail(options.status().message(), 2);
   Result<v1::LocalMap> map = client::ReadPointsFile(file);
   if (!map.ok()) return Fail(map.status().message());
+  map->set_heading_drift_rad_per_m(options->heading_drift_rad_per_m);
 
   v1::InsertMapsRequest request;
   v1::InsertMapRequest* insert = request.add_maps();

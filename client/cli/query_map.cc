@@ -112,7 +112,9 @@ Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
     usage = false;
     Result<v1::LocalMap> map = client::ReadPointsFile(args.Get("file"));
     if (!map.ok()) return map.status();
-    return QueryInput{FromProto(*map), {}};
+    QueryInput input{FromProto(*map), {}};
+    input.map.heading_drift_rad_per_m = local_maps->heading_drift_rad_per_m;
+    return input;
   }
   const char* source = args.Has("bag") ? "--bag" : "--log";
   if (!args.Has("map")) return Status::InvalidArgument(std::string(source) + " needs --map K (0-based map number)");

@@ -89,8 +89,9 @@ Pose2 RefinePose(const std::vector<Point2>& query_points, const PreparedMap& db,
 }
 
 Eigen::Matrix3d BendCovariance(const PreparedMap& query, const PreparedMap& db) {
-  const double position = query.bend_position_sd_m * query.bend_position_sd_m + db.bend_position_sd_m * db.bend_position_sd_m;
-  const double heading = query.bend_heading_sd_rad * query.bend_heading_sd_rad + db.bend_heading_sd_rad * db.bend_heading_sd_rad;
+  const auto squared = [](double sd) { return sd * sd; };
+  const double position = squared(query.bend.position_sd_m) + squared(db.bend.position_sd_m);
+  const double heading = squared(query.bend.heading_sd_rad) + squared(db.bend.heading_sd_rad);
   return Eigen::Vector3d(position, position, heading).asDiagonal();
 }
 

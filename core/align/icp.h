@@ -67,7 +67,7 @@ Eigen::Matrix3d PoseCovariance(const std::vector<Point2>& query_points, const Pr
                                const IcpOptions& icp = {}, const PoseCovarianceOptions& options = {});
 
 // What a fit of `query` on `db` cannot know of the pose because either map
-// bends (PreparedMap::bend_*): both maps' heading and position variances,
+// bends (PreparedMap::bend): both maps' heading and position variances,
 // summed (the position's alike in every direction). Zero for rigid maps.
 Eigen::Matrix3d BendCovariance(const PreparedMap& query, const PreparedMap& db);
 

@@ -236,20 +236,25 @@ PreparedMap PrepareMap(const LocalMap& map, const PreparedMapOptions& options, s
 PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map, std::optional<double> known_heading) {
   if (grid.empty() || !grid.SearchGridOnly()) return grid;
   AddPointStructures(&grid, known_heading);
-  MapBend(map, &grid.bend_heading_sd_rad, &grid.bend_position_sd_m);
+  grid.bend = MapBend(map);
   if (grid.options.free_space && (!map.scans.empty() || !map.trajectory.empty())) {
     grid.occupancy = BuildOccupancyGrid(map, 0.0, grid.options.free_grid);
   }
   return grid;
 }
 
-void MapBend(const LocalMap& map, double* heading_sd_rad, double* position_sd_m) {
-  double path_m = 0.0;
-  for (size_t i = 1; i < map.trajectory.size(); ++i) {
-    path_m += std::hypot(map.trajectory[i].x - map.trajectory[i - 1].x, map.trajectory[i].y - map.trajectory[i - 1].y);
+PreparedMap::Bend MapBend(const LocalMap& map) {
+  std::vector<Pose2> scan_poses;
+  if (map.trajectory.empty()) {
+    for (const Scan& scan : map.scans) scan_poses.push_back(scan.pose);
   }
-  *heading_sd_rad = map.heading_drift_rad_per_m * path_m / 2 / std::sqrt(3.0);
-  *position_sd_m = path_m / 2 * *heading_sd_rad;
+  const std::vector<Pose2>& path = map.trajectory.empty() ? scan_poses : map.trajectory;
+  double path_m = 0.0;
+  for (size_t i = 1; i < path.size(); ++i) path_m += std::hypot(path[i].x - path[i - 1].x, path[i].y - path[i - 1].y);
+  PreparedMap::Bend bend;
+  bend.heading_sd_rad = map.heading_drift_rad_per_m * path_m / 2 / std::sqrt(3.0);
+  bend.position_sd_m = path_m / 2 * bend.heading_sd_rad;
+  return bend;
 }
 
 bool InFreeSpace(const PreparedMap& map, const Point2& p) {

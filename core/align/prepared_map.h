@@ -82,10 +82,12 @@ struct PreparedMap {
   std::vector<Point2> normals;      // unit normal per point; (0, 0) where undefined
   Point2 min_corner, max_corner;    // bounding box of points (own frame)
   double heading = 0.0;             // rad in [0, pi/2): dominant orientation (entropy compass)
-  // How far a rigid fit may put the map's own frame off because its
-  // trajectory bends (LocalMap::heading_drift_rad_per_m; MapBend): standard
-  // deviations of the frame's heading and position, 0 for a rigid map.
-  double bend_heading_sd_rad = 0.0, bend_position_sd_m = 0.0;
+  // How far a rigid fit may put the map's own frame off because its path
+  // bends (LocalMap::heading_drift_rad_per_m; MapBend); zero for a rigid map.
+  struct Bend {
+    double heading_sd_rad = 0.0;
+    double position_sd_m = 0.0;
+  } bend;
 
   // Likelihood pyramid; grid_origin = own-frame position of level-0 cell (0, 0)'s lower-left corner.
   Point2 grid_origin;
@@ -153,13 +155,19 @@ PreparedMap PrepareSearchGrid(const std::vector<Point2>& points, const PreparedM
 PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map,
                                 std::optional<double> known_heading = std::nullopt);
 
-// PreparedMap::bend_* of `map`. Its heading drifts at a rate of up to
+// PreparedMap::bend of `map`. Its heading drifts at a rate of up to
 // heading_drift_rad_per_m, sign and size unknown (taken as uniform), so
-// over its path of length L its end turns by up to that times L. A rigid
-// fit turns the map to match its middle, leaving the frame, L / 2 from
-// there, turned by about half that: heading sd = rate * L / 2 / sqrt(3);
-// position sd = L / 2 times the heading sd.
-void MapBend(const LocalMap& map, double* heading_sd_rad, double* position_sd_m);
+// over its path of length L (its trajectory's, else its scans' poses') its
+// end turns by up to that times L. A rigid fit of the whole map turns it to
+// match its middle and leaves its frame about half that turned; a map
+// matched along a stretch of its path is turned as much as the bend up to
+// there, on average about as much again: heading sd = rate * L / 2 /
+// sqrt(3). The frame lies up to L / 2 from the middle of its path: position
+// sd = L / 2 times the heading sd (for the query's own frame, which a fit
+// pins at its middle, about three times what it is; for the stored map's,
+// about what it is where the query lies along its path). The length error
+// of odometry is not in it: a robot states its heading drift only.
+PreparedMap::Bend MapBend(const LocalMap& map);
 
 // Index of the map point nearest to p within max_dist_m (<= neighbour_cell_m),
 // or -1 if none. *dist2 (if not null) receives its squared distance.

@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/align/correlative_search.h"
+#include "core/align/icp.h"
 #include "core/localize/site_grid.h"
 #include "core/localize/verification.h"
 #include "core/localmap/pose_ops.h"
@@ -292,6 +293,11 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
     keep_each_once(&kept);
     std::vector<JudgedHit> as_judged = AsJudged(kept);
     nearest_sure = Judge(&as_judged, judged.confidence).sure;
+    // Maps that may bend more than a sure answer's promise allows cannot
+    // make one, whatever their fit (Conclude adds their bends).
+    if (nearest_sure && query.map && kept.front().db) {
+      nearest_sure = PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence);
+    }
   }
   if (options.prior_first_stage && !nearest_sure) {
     for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, &out.stats)) {

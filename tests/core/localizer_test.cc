@@ -796,24 +796,37 @@ TEST(LocalizerTest, ASureVerdictNeedsItsFitToKnowThePose) {
   EXPECT_GT(sure, 0u);
 }
 
-// A query whose robot says its odometry may turn it by 0.5 deg per metre
+// A map whose robot says its odometry may turn it by 0.5 deg per metre
 // could be bent by a degree or two over its metres of path: no rigid fit
-// knows its frame's heading to a degree, so demo queries sure when rigid
-// are not sure so, and their covariance has grown by the bend.
+// knows its frame's heading to a degree. Demo queries sure when every map
+// is rigid are not sure when the query may bend, nor when the stored maps
+// may; the answers are the same, their covariances grown by the bend.
 TEST(LocalizerTest, AMapThatMayBendIsNotSureToADegree) {
-  MemoryCollection collection;
+  const double drift = 0.5 * M_PI / 180;
+  MemoryCollection collection, bendable_stored;
   Store(EveryThirdMap(), &collection);
+  for (size_t i : EveryThirdMap()) {
+    LocalMap stored = DemoMaps()[i];
+    stored.heading_drift_rad_per_m = drift;
+    ASSERT_TRUE(bendable_stored.Add(i, PreparePlace(stored, kOptions), MapSource::Route{1, i + 1}).ok()) << i;
+  }
   size_t sure = 0;
   for (size_t q = 5; q < DemoMaps().size(); q += 40) {
     LocalMap bendable = MovedDemoMap(q);
-    const Localization rigid = Localize(PrepareLocalQuery(bendable, kOptions), collection, kOptions);
-    bendable.heading_drift_rad_per_m = 0.5 * M_PI / 180;
+    const LocalQuery rigid_query = PrepareLocalQuery(bendable, kOptions);
+    const Localization rigid = Localize(rigid_query, collection, kOptions);
+    bendable.heading_drift_rad_per_m = drift;
     const Localization bent = Localize(PrepareLocalQuery(bendable, kOptions), collection, kOptions);
+    const Localization on_bent = Localize(rigid_query, bendable_stored, kOptions);
     sure += rigid.verdict.sure;
     EXPECT_FALSE(bent.verdict.sure) << q;
+    EXPECT_FALSE(on_bent.verdict.sure) << q;
     if (rigid.hits.empty()) continue;
-    EXPECT_EQ(bent.hits[0].map_id, rigid.hits[0].map_id) << q;  // the same answer, less sure
-    EXPECT_GT(bent.verdict.pose_covariance(2, 2), rigid.verdict.pose_covariance(2, 2)) << q;
+    for (const Localization* other : {&bent, &on_bent}) {
+      ASSERT_FALSE(other->hits.empty()) << q;
+      EXPECT_EQ(other->hits[0].map_id, rigid.hits[0].map_id) << q;
+      EXPECT_GT(other->verdict.pose_covariance(2, 2), rigid.verdict.pose_covariance(2, 2)) << q;
+    }
   }
   EXPECT_GT(sure, 0u);
 }

@@ -102,12 +102,12 @@ TEST(PoseCovarianceTest, AMapThatMayBendAddsItsBendToThePose) {
   LocalMap map = RoomWalls(4.0, 3.0);
   map.trajectory = {{0, 0, 0}, {2, 0, 0}, {2, 2, M_PI / 2}};
   const PreparedMap rigid = PrepareMap(map);
-  EXPECT_EQ(rigid.bend_heading_sd_rad, 0.0);
+  EXPECT_EQ(rigid.bend.heading_sd_rad, 0.0);
   map.heading_drift_rad_per_m = M_PI / 180;
   const PreparedMap bendable = PrepareMap(map);
   const double heading_sd = 2.0 / std::sqrt(3.0) * M_PI / 180;
-  EXPECT_NEAR(bendable.bend_heading_sd_rad, heading_sd, 1e-12);
-  EXPECT_NEAR(bendable.bend_position_sd_m, 2.0 * heading_sd, 1e-12);
+  EXPECT_NEAR(bendable.bend.heading_sd_rad, heading_sd, 1e-12);
+  EXPECT_NEAR(bendable.bend.position_sd_m, 2.0 * heading_sd, 1e-12);
 
   EXPECT_TRUE(BendCovariance(rigid, rigid).isZero());
   const Eigen::Matrix3d one = BendCovariance(bendable, rigid), both = BendCovariance(bendable, bendable);
@@ -116,6 +116,12 @@ TEST(PoseCovarianceTest, AMapThatMayBendAddsItsBendToThePose) {
   EXPECT_NEAR(Sigma(one, 1), 2.0 * heading_sd, 1e-12);
   EXPECT_NEAR(Sigma(both, 2), std::sqrt(2.0) * heading_sd, 1e-12);
   EXPECT_TRUE(BendCovariance(rigid, bendable).isApprox(one));
+
+  // Without a trajectory, the scans' poses are the path.
+  LocalMap scanned = map;
+  for (const Pose2& pose : map.trajectory) scanned.scans.push_back(Scan{pose, 0.0f, 0.01f, 10.0f, {}});
+  scanned.trajectory.clear();
+  EXPECT_NEAR(MapBend(scanned).heading_sd_rad, heading_sd, 1e-12);
 }
 
 }  // namespace

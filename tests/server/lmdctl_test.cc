@@ -261,6 +261,18 @@ TEST_F(LmdctlLogTest, IngestStatesTheOdometrysHeadingDriftOnEveryMap) {
   ASSERT_TRUE(server.client().GetMap(get, &got).ok());
   EXPECT_NEAR(got.map().map().heading_drift_rad_per_m(), 0.5 * M_PI / 180, 1e-9);
 
+  // A points file with its poses, inserted as such a map.
+  const std::string file = dir_.path() + "/walked.txt";
+  std::FILE* out = std::fopen(file.c_str(), "w");
+  ASSERT_NE(out, nullptr);
+  std::fputs("pose 0 0 0\npose 2 0 0\n0 1\n1 1\n2 1\n0 -1\n", out);
+  std::fclose(out);
+  CliRun insert = RunLmdctl(base + "insert --collection fleet --id walked --heading-drift 1 --file " + file, dir_);
+  ASSERT_EQ(insert.exit_code, 0) << insert.err;
+  get.set_map_id("walked");
+  ASSERT_TRUE(server.client().GetMap(get, &got).ok());
+  EXPECT_NEAR(got.map().map().heading_drift_rad_per_m(), M_PI / 180, 1e-9);
+
   CliRun too_much = RunLmdctl(base + "ingest --collection fleet --heading-drift 40" + log, dir_);
   EXPECT_EQ(too_much.exit_code, 2);
   EXPECT_EQ(CountLines(too_much.err), 1) << too_much.err;

@@ -358,14 +358,30 @@ TEST_F(MapServiceTest, AMapsOdometryDriftIsKeptOrRefusedNamingIt) {
   ASSERT_TRUE(server.client().GetMap(get, &got).ok());
   EXPECT_EQ(got.map().map().heading_drift_rad_per_m(), 0.01);
 
-  for (double bad : {-0.01, 0.6, std::numeric_limits<double>::quiet_NaN()}) {
+  for (double bad : {-0.01, 0.6, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     v1::LocalMap map = SquareRoomMap();
     map.set_heading_drift_rad_per_m(bad);
-    const grpc::Status status = InsertOne(server, map);
+    grpc::Status status = InsertOne(server, map);
     EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad;
     EXPECT_NE(status.error_message().find("heading_drift_rad_per_m must be a number from 0 to 0.5"), std::string::npos)
         << status.error_message();
+    v1::RetrieveRequest query;  // a query map alike
+    query.set_collection("site");
+    *query.mutable_map() = map;
+    v1::RetrieveResponse answer;
+    status = server.client().Retrieve(query, &answer);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad;
+    EXPECT_NE(status.error_message().find("query map: heading_drift_rad_per_m"), std::string::npos)
+        << status.error_message();
   }
+  // A bend needs the path it bends along.
+  v1::LocalMap points_only = SquareRoomMap();
+  points_only.clear_trajectory();
+  points_only.set_heading_drift_rad_per_m(0.01);
+  const grpc::Status no_path = InsertOne(server, points_only);
+  EXPECT_EQ(no_path.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(no_path.error_message().find("needs the map's trajectory or scans"), std::string::npos)
+      << no_path.error_message();
   v1::ListMapsRequest list;
   list.set_collection("site");
   v1::ListMapsResponse listed;
