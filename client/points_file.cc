@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <string_view>
@@ -22,7 +23,7 @@ bool ReadNumbers(std::istringstream& in, int count, double* out) {
   return !(in >> rest);
 }
 
-// A points line is "x y" or "pose x y theta" with perhaps a comment; a
+// A points line is "x y", "pose x y theta" or "heading_drift r" with perhaps a comment; a
 // longer one is not a points file (binary data, /dev/zero, which once grew
 // lmdctl's memory for ever): refusing it bounds memory.
 constexpr size_t kMaxLineBytes = 64 << 10;
@@ -43,6 +44,13 @@ Status ParsePointsLine(std::string line, const std::string& where, v1::LocalMap*
     pose->set_x(values[0]);
     pose->set_y(values[1]);
     pose->set_theta(values[2]);
+    return Status::Ok();
+  }
+  if (first == "heading_drift") {
+    if (!ReadNumbers(in, 1, values)) {
+      return Status::InvalidArgument(where + ": expected 'heading_drift r' with a finite number (rad per metre)");
+    }
+    map->set_heading_drift_rad_per_m(values[0]);
     return Status::Ok();
   }
   std::istringstream point(line);
@@ -81,7 +89,11 @@ Result<v1::LocalMap> ReadPointsFile(const std::string& path) {
 Status WritePointsFile(const std::string& path, const v1::LocalMap& map) {
   std::ofstream out(path);
   if (!out) return Status::IoError("cannot write points file " + path);
-  out << "# lmd points file: x y (m, own frame); pose x y theta\n";
+  out << "# lmd points file: x y (m, own frame); pose x y theta; heading_drift r\n";
+  if (map.heading_drift_rad_per_m() != 0) {  // as sent: read back, it is the same double
+    out << "heading_drift " << std::setprecision(std::numeric_limits<double>::max_digits10)
+        << map.heading_drift_rad_per_m() << std::setprecision(6) << '\n';
+  }
   for (const auto& pose : map.trajectory()) out << "pose " << pose.x() << ' ' << pose.y() << ' ' << pose.theta() << '\n';
   for (int i = 0; i < map.x_size(); ++i) out << map.x(i) << ' ' << map.y(i) << '\n';
   out.close();

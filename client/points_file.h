@@ -3,6 +3,7 @@
 //   # comment (from '#' to the end of the line)
 //   1.25 -0.40            a point: x y, metres, the map's own frame
 //   pose 0.0 0.0 1.5708   a trajectory pose: x y (m) theta (rad), optional
+//   heading_drift 0.0087  how far the poses may turn per metre (rad; LocalMap.heading_drift_rad_per_m), optional
 //
 // Blank lines are skipped. Anything else is an error naming file:line.
 #pragma once

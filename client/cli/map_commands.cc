@@ -16,7 +16,7 @@ int InsertCommand(const CommandContext& ctx) {
   if (!options.ok()) return Fail(options.status().message(), 2);
   Result<v1::LocalMap> map = client::ReadPointsFile(file);
   if (!map.ok()) return Fail(map.status().message());
-  map->set_heading_drift_rad_per_m(options->heading_drift_rad_per_m);
+  if (ctx.args.Has("heading-drift")) map->set_heading_drift_rad_per_m(options->heading_drift_rad_per_m);
 
   v1::InsertMapsRequest request;
   v1::InsertMapRequest* insert = request.add_maps();

@@ -113,7 +113,7 @@ Result<QueryInput> QueryFromArgs(const Args& args, bool* usage_error) {
     Result<v1::LocalMap> map = client::ReadPointsFile(args.Get("file"));
     if (!map.ok()) return map.status();
     QueryInput input{FromProto(*map), {}};
-    input.map.heading_drift_rad_per_m = local_maps->heading_drift_rad_per_m;
+    if (args.Has("heading-drift")) input.map.heading_drift_rad_per_m = local_maps->heading_drift_rad_per_m;
     return input;
   }
   const char* source = args.Has("bag") ? "--bag" : "--log";

@@ -272,6 +272,13 @@ TEST_F(LmdctlLogTest, IngestStatesTheOdometrysHeadingDriftOnEveryMap) {
   get.set_map_id("walked");
   ASSERT_TRUE(server.client().GetMap(get, &got).ok());
   EXPECT_NEAR(got.map().map().heading_drift_rad_per_m(), M_PI / 180, 1e-9);
+  // Read back into a points file and inserted again, it keeps its drift.
+  const std::string back = dir_.path() + "/back.txt";
+  ASSERT_EQ(RunLmdctl(base + "get --collection fleet --id walked --out " + back, dir_).exit_code, 0);
+  ASSERT_EQ(RunLmdctl(base + "insert --collection fleet --id again --file " + back, dir_).exit_code, 0);
+  get.set_map_id("again");
+  ASSERT_TRUE(server.client().GetMap(get, &got).ok());
+  EXPECT_NEAR(got.map().map().heading_drift_rad_per_m(), M_PI / 180, 1e-9);
 
   CliRun too_much = RunLmdctl(base + "ingest --collection fleet --heading-drift 40" + log, dir_);
   EXPECT_EQ(too_much.exit_code, 2);
