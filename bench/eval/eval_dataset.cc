@@ -98,7 +98,7 @@ void DriftMaps(double deg_per_m, uint64_t seed, std::vector<LocalMap>* maps) {
 }  // namespace
 
 std::vector<std::string> WithSensorFlags(std::vector<std::string> valued) {
-  for (const char* flag : {"max-range", "range-noise", "map-drift"}) valued.push_back(flag);
+  for (const char* flag : {"max-range", "range-noise", "map-drift", "map-length"}) valued.push_back(flag);
   return valued;
 }
 
@@ -106,7 +106,8 @@ bool SensorFromFlags(Flags& args, DatasetOptions* options) {
   double max_range = 0.0;
   if (!args.Number("max-range", 1.0, CarmenReadOptions().max_usable_range, 0.0, &max_range) ||
       !args.Number("range-noise", 0.0, 1.0, 0.0, &options->range_noise_m) ||
-      !args.Number("map-drift", 0.0, 10.0, 0.0, &options->map_drift_deg_per_m)) {
+      !args.Number("map-drift", 0.0, 10.0, 0.0, &options->map_drift_deg_per_m) ||
+      !args.Number("map-length", 1.0, 20.0, 5.0, &options->map_length_m)) {
     return false;
   }
   options->max_range_m = static_cast<float>(max_range);
@@ -123,6 +124,7 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
   if (!log.ok()) return log.status();
   if (options.range_noise_m > 0) AddRangeNoise(options.range_noise_m, options.seed, &*log);
   LocalMapOptions lm;
+  lm.length_m = options.map_length_m;
   lm.id_prefix = d.name;
   d.maps = BuildLocalMaps(*log, lm);
   const std::vector<RelevantPair> pairs = FindRelevantPairs(d.maps, GroundTruthOptions{10.0, 0.5,

@@ -76,15 +76,18 @@ struct DatasetOptions {
   // drawn once per map (WithDriftedOdometry, seeded by `seed`). Place truth,
   // relevant pairs and the maps' frames stay those of the logs' poses.
   double map_drift_deg_per_m = 0.0;
+  // m of travel per local map (the protocol's 5), as robots that send
+  // shorter or longer maps; a new one still starts every metre.
+  double map_length_m = 5.0;
 };
 
 // `valued` with the flags SensorFromFlags reads, for the commands that load
 // datasets.
 std::vector<std::string> WithSensorFlags(std::vector<std::string> valued);
 
-// --max-range M (1-30 m), --range-noise S (0-1 m) and --map-drift D (0-10
-// deg per m) from `args` into `options`; false, with args.error() saying
-// what is wrong, when one is out of range.
+// --max-range M (1-30 m), --range-noise S (0-1 m), --map-drift D (0-10
+// deg per m) and --map-length L (1-20 m) from `args` into `options`; false,
+// with args.error() saying what is wrong, when one is out of range.
 bool SensorFromFlags(Flags& args, DatasetOptions* options);
 
 // Reads the log, builds local maps (5 m every 1 m), ground truth, place truth

@@ -1,14 +1,16 @@
 #!/bin/sh
 # lmd-eval reads a log as a shorter-range or noisier laser would see it
 # (--max-range, --range-noise), and its maps as a robot on drifting odometry
-# would build them (--map-drift): a robot drives 8 m along x past a wall 2 m
+# (--map-drift) or one that sends shorter maps (--map-length) would build
+# them: a robot drives 8 m along x past a wall 2 m
 # to its right and one 8 m to its left. Read as it is, its maps hold both
 # walls; read with --max-range 5, the far wall's returns are no returns and
 # the near wall's within 5 m are left; with --range-noise 0.05, the near
 # wall's points spread across it by a few centimetres (the noise is along
 # each beam); with --map-drift 2, each map's near wall beside its route
 # bends away from y = -2 by tens of centimetres at its far end, while the
-# maps' frames and the place truth stay the log's.
+# maps' frames and the place truth stay the log's; with --map-length 2.5,
+# twice as many maps (one per metre) of at most 2.5 m of travel each.
 # usage: sensor_test.sh LMD_EVAL WORKDIR
 set -eu
 eval_bin=$1
@@ -48,8 +50,17 @@ bend_drift=$(bend "$work/drift/corridor.maps.txt")
 same_frames=$([ "$(frames "$work/full/corridor.maps.txt")" = "$(frames "$work/drift/corridor.maps.txt")" ] && echo yes || echo no)
 same_truth=$(cmp -s "$work/full/corridor.truth.txt" "$work/drift/corridor.truth.txt" && echo yes || echo no)
 echo "near wall bent by $bend_full cm as recorded, $bend_drift cm on drifting odometry; same frames $same_frames, same truth $same_truth"
+"$eval_bin" export --log "$work/corridor.log" --map-length 2.5 --out "$work/short_maps" 2> /dev/null
+maps() { awk '$1 == "MAP"' "$1" | wc -l; }
+longest() { awk '$1 == "MAP" && $7 - $6 > m { m = $7 - $6 } END { printf "%d", 10 * m }' "$1"; }  # dm of travel
+maps_full=$(maps "$work/full/corridor.maps.txt")
+maps_short=$(maps "$work/short_maps/corridor.maps.txt")
+longest_full=$(longest "$work/full/corridor.maps.txt")
+longest_short=$(longest "$work/short_maps/corridor.maps.txt")
+echo "maps: $maps_full of up to $longest_full dm, $maps_short of up to $longest_short dm with --map-length 2.5"
 echo "far wall points: $far_full as recorded, $far_short at 5 m; near wall: $near_full and $near_short"
 echo "near wall spread: $spread_full cm as recorded, $spread_noisy cm with 5 cm of noise"
 [ "$far_full" -gt 0 ] && [ "$near_full" -gt 0 ] && [ "$far_short" -eq 0 ] && [ "$near_short" -gt 0 ] &&
   [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ] &&
-  [ "$bend_full" -eq 0 ] && [ "$bend_drift" -ge 10 ] && [ "$same_frames" = yes ] && [ "$same_truth" = yes ]
+  [ "$bend_full" -eq 0 ] && [ "$bend_drift" -ge 10 ] && [ "$same_frames" = yes ] && [ "$same_truth" = yes ] &&
+  [ "$maps_short" -eq $((2 * maps_full)) ] && [ "$longest_full" -gt 25 ] && [ "$longest_short" -le 25 ]
