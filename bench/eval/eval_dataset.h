@@ -90,7 +90,7 @@ std::vector<std::string> WithSensorFlags(std::vector<std::string> valued);
 // with args.error() saying what is wrong, when one is out of range.
 bool SensorFromFlags(Flags& args, DatasetOptions* options);
 
-// Reads the log, builds local maps (5 m every 1 m), ground truth, place truth
+// Reads the log, builds local maps (map_length_m every 1 m), ground truth, place truth
 // and simulated changes. IoError etc. from the reader.
 Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options);
 

@@ -1,11 +1,12 @@
 #include "bench/eval/served_report.h"
 
 #include <algorithm>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+
+#include <fmt/printf.h>
 
 #include "core/render/svg_writer.h"
 
@@ -17,19 +18,6 @@ constexpr char kCsvHeader[] =
     "wrong_pose_fits_better,confidence,best_score,rival_score,rival,agreeing,cpu_ms,wall_ms,changed_localized,"
     "first_change_mask,masks,false_masks,changed_best_score,changed_rival_score,changed_cpu_ms,top_hit,site_err_m,"
     "site_err_deg,pose_d2,position_sd_m,heading_sd_deg\n";
-
-// printf into a string of whatever length it takes.
-__attribute__((format(printf, 1, 2))) std::string Formatted(const char* format, ...) {
-  va_list args, again;
-  va_start(args, format);
-  va_copy(again, args);
-  const int n = std::vsnprintf(nullptr, 0, format, args);
-  va_end(args);
-  std::string out(n > 0 ? static_cast<size_t>(n) : 0, '\0');
-  if (n > 0) std::vsnprintf(out.data(), out.size() + 1, format, again);
-  va_end(again);
-  return out;
-}
 
 struct Group {
   std::string label;
@@ -67,16 +55,16 @@ std::string StillRows(const ServedRun& run, const std::string& mean_note,
 
 std::string Row(const std::string& label, const std::string& maps, const AnswerSummary& s, const AnswerSummary& c,
                 bool with_changes) {
-  std::string row = Formatted(
+  std::string row = fmt::sprintf(
       "| %s | %s | %zu / %zu | %.3f | %.3f | %.1f / %.1f cm, %.2f / %.2f deg | %.3f | %.4f (%zu wrong, "
       "%zu fit better) | %.1f / %.1f | %.1f / %.1f |",
       label.c_str(), maps.c_str(), s.place_queries, s.queries, s.place_at_1, s.place_at_5, 100 * s.pose_err_m_median,
       100 * s.pose_err_m_p90, s.pose_err_deg_median, s.pose_err_deg_p90, s.localized_share, s.localized_precision,
       s.localized_wrong, s.wrong_pose_fits_better, s.cpu_ms_p50, s.cpu_ms_p99, s.wall_ms_p50, s.wall_ms_p99);
   if (with_changes) {
-    row += Formatted(" %.3f (%zu) | %.3f (%zu of %zu) | %.3f / %.4f | %.1f / %.1f |", c.change_success_at_1,
-                     c.change_tasks, c.false_mask_share, c.false_masks, c.masks, c.localized_share,
-                     c.localized_precision, c.cpu_ms_p50, c.cpu_ms_p99);
+    row += fmt::sprintf(" %.3f (%zu) | %.3f (%zu of %zu) | %.3f / %.4f | %.1f / %.1f |", c.change_success_at_1,
+                        c.change_tasks, c.false_mask_share, c.false_masks, c.masks, c.localized_share,
+                        c.localized_precision, c.cpu_ms_p50, c.cpu_ms_p99);
   }
   return row + "\n";
 }
@@ -84,7 +72,7 @@ std::string Row(const std::string& label, const std::string& maps, const AnswerS
 std::string Markdown(const ServedRun& run, bool with_changes) {
   std::string md = "# lmd-eval served\n\n";
   md += "Command: `" + run.command + "`  \nDate: " + run.date + "  \n";
-  md += Formatted("Run time %.0f s; lmdd CPU over the run %.0f s.\n\n", run.seconds, run.lmdd_cpu_seconds);
+  md += fmt::sprintf("Run time %.0f s; lmdd CPU over the run %.0f s.\n\n", run.seconds, run.lmdd_cpu_seconds);
   md += "Every map inserted in its own frame (trajectory, scans; robot = the log), then each sent back as a "
         "query with the maps within 10 m of travel excluded. place@k over the queries with a place among their "
         "candidates (>= 50 % of the query's points within 0.3 m of a hit's); pose error of right top hits "
@@ -111,8 +99,8 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
           "query's log pose, where the top hit shows the place.\n\n| log | answers | site pose error (median / p90) "
           "| deg (median) |\n|---|---|---|---|\n";
     auto site = [](const std::string& label, const AnswerSummary& s) {
-      return Formatted("| %s | %zu | %.1f / %.1f cm | %.2f |\n", label.c_str(), s.site_count,
-                       100 * s.site_err_m_median, 100 * s.site_err_m_p90, s.site_err_deg_median);
+      return fmt::sprintf("| %s | %zu | %.1f / %.1f cm | %.2f |\n", label.c_str(), s.site_count,
+                          100 * s.site_err_m_median, 100 * s.site_err_m_p90, s.site_err_deg_median);
     };
     md += StillRows(run, "", site);
   }
@@ -121,8 +109,8 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
         "3 degrees of freedom), and of the sure ones, within 95 %. Calibrated, they read 0.50 and 0.95.\n\n"
         "| log | answers | within 50 % | within 95 % | sure | sure within 95 % |\n|---|---|---|---|---|---|\n";
   auto covered = [](const std::string& label, const AnswerSummary& s) {
-    return Formatted("| %s | %zu | %.3f | %.3f | %zu | %.3f |\n", label.c_str(), s.covariance_count, s.within_50,
-                     s.within_95, s.covariance_sure, s.sure_within_95);
+    return fmt::sprintf("| %s | %zu | %.3f | %.3f | %zu | %.3f |\n", label.c_str(), s.covariance_count, s.within_50,
+                        s.within_95, s.covariance_sure, s.sure_within_95);
   };
   md += StillRows(run, "", covered);
   md += "\nConfidence (Localization.confidence) against how often the top hit was right (the place, the pose "
@@ -131,8 +119,8 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
         "(mean squared gap). Lower is better; 0 is perfect.\n\n"
         "| log | answers | calibration error | Brier score |\n|---|---|---|---|\n";
   auto calibration = [](const std::string& label, const AnswerSummary& s) {
-    return Formatted("| %s | %zu | %.3f | %.3f |\n", label.c_str(), s.queries, s.reliability.calibration_error,
-                     s.reliability.brier);
+    return fmt::sprintf("| %s | %zu | %.3f | %.3f |\n", label.c_str(), s.queries, s.reliability.calibration_error,
+                        s.reliability.brier);
   };
   md += StillRows(run, "", calibration);
   md += "\nRight but unsure (the top hit shows the place, its pose within 0.2 m and 1 deg, lmdd not sure), by "
@@ -143,9 +131,9 @@ std::string Markdown(const ServedRun& run, bool with_changes) {
         "| log | right but unsure | none | self | same place | place off | elsewhere |\n"
         "|---|---|---|---|---|---|---|\n";
   auto rivals = [](const std::string& label, const AnswerSummary& s) {
-    return Formatted("| %s | %zu | %zu | %zu | %zu | %zu | %zu |\n", label.c_str(), s.unsure_right,
-                     s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2],
-                     s.unsure_right_rival[3], s.unsure_right_rival[4]);
+    return fmt::sprintf("| %s | %zu | %zu | %zu | %zu | %zu | %zu |\n", label.c_str(), s.unsure_right,
+                        s.unsure_right_rival[0], s.unsure_right_rival[1], s.unsure_right_rival[2],
+                        s.unsure_right_rival[3], s.unsure_right_rival[4]);
   };
   md += StillRows(run, " (sum)", rivals);
   return md;

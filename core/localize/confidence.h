@@ -113,9 +113,10 @@ struct ConfidenceOptions {
   // scale and floor were fitted on the tuning logs before
   // (PoseCovarianceOptions). It is what a shorter-range laser needs: its
   // maps' walls lie close to the robot and pin the heading less, and two
-  // walls meeting at a corner fit many places. Served (lmd-eval served, 2026-12-07, one lmdd with and
-  // without; held out, mean over logs): global sure 0.385 -> 0.352 of the
-  // answers, right 99.30 -> 99.84 % (5 -> 1 wrong; tuning logs 2 -> 0);
+  // walls meeting at a corner fit many places. Served (lmd-eval served,
+  // 2026-12-07, one lmdd with and without; held out, mean over logs):
+  // global sure 0.385 -> 0.352 of the answers, right 99.30 -> 99.84 % (5 ->
+  // 1 wrong; tuning logs 2 -> 0);
   // tracking priors 0.552 -> 0.492, 99.54 -> 99.90 % (10 -> 4); loose
   // priors 0.537 -> 0.477, 99.51 -> 99.95 % (8 -> 2); sequences 0.351 ->
   // 0.337, none wrong either way. The logs read as by a 5.6 m laser
