@@ -83,6 +83,23 @@ void AddRangeNoise(double sigma_m, uint64_t seed, LaserLog* log) {
   }
 }
 
+// Each scan cut to its beams within fov_deg / 2 of the laser's heading.
+void NarrowFieldOfView(double fov_deg, LaserLog* log) {
+  const double half = fov_deg / 2 * M_PI / 180;
+  for (Scan& scan : log->scans) {
+    std::vector<float> kept;
+    float first = 0.0f;
+    for (size_t b = 0; b < scan.ranges.size(); ++b) {
+      const double angle = scan.first_angle + static_cast<double>(b) * scan.angle_step;
+      if (std::abs(std::remainder(angle, 2 * M_PI)) > half) continue;
+      if (kept.empty()) first = static_cast<float>(angle);
+      kept.push_back(scan.ranges[b]);
+    }
+    scan.first_angle = first;
+    scan.ranges = std::move(kept);
+  }
+}
+
 // Each map as built on drifting odometry (one rng per map, from the seed,
 // the dataset and the map's index).
 void DriftMaps(double deg_per_m, uint64_t seed, std::vector<LocalMap>* maps) {
@@ -98,7 +115,7 @@ void DriftMaps(double deg_per_m, uint64_t seed, std::vector<LocalMap>* maps) {
 }  // namespace
 
 std::vector<std::string> WithSensorFlags(std::vector<std::string> valued) {
-  for (const char* flag : {"max-range", "range-noise", "map-drift", "map-length"}) valued.push_back(flag);
+  for (const char* flag : {"max-range", "range-noise", "fov", "map-drift", "map-length"}) valued.push_back(flag);
   return valued;
 }
 
@@ -106,6 +123,7 @@ bool SensorFromFlags(Flags& args, DatasetOptions* options) {
   double max_range = 0.0;
   if (!args.Number("max-range", 1.0, CarmenReadOptions().max_usable_range, 0.0, &max_range) ||
       !args.Number("range-noise", 0.0, 1.0, 0.0, &options->range_noise_m) ||
+      !args.Number("fov", 10.0, 360.0, 360.0, &options->fov_deg) ||
       !args.Number("map-drift", 0.0, 10.0, 0.0, &options->map_drift_deg_per_m) ||
       !args.Number("map-length", 1.0, 20.0, 5.0, &options->map_length_m)) {
     return false;
@@ -123,6 +141,7 @@ Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& o
   Result<LaserLog> log = IsBagPath(log_path) ? ReadTruthBag(log_path, options) : ReadCarmenLog(log_path, carmen);
   if (!log.ok()) return log.status();
   if (options.range_noise_m > 0) AddRangeNoise(options.range_noise_m, options.seed, &*log);
+  if (options.fov_deg < 360) NarrowFieldOfView(options.fov_deg, &*log);
   LocalMapOptions lm;
   lm.length_m = options.map_length_m;
   lm.id_prefix = d.name;

@@ -70,6 +70,10 @@ struct DatasetOptions {
   // m, > 0: Gaussian noise of this standard deviation added to every
   // return (seeded by `seed`), as a noisier laser than the logs' would read.
   double range_noise_m = 0.0;
+  // deg, < 360: only the beams within half this either side of the laser's
+  // heading kept, as a narrower sensor (a depth camera's 60-90 deg, a
+  // front laser's 180) would see. 360: every beam the log holds.
+  double fov_deg = 360.0;
   // deg per m, > 0: every local map (stored and queried alike) built on
   // odometry that drifts within it, as a robot without a scan matcher builds
   // its maps: a heading rate of up to this and a length error of up to 2 %,
@@ -85,8 +89,9 @@ struct DatasetOptions {
 // datasets.
 std::vector<std::string> WithSensorFlags(std::vector<std::string> valued);
 
-// --max-range M (1-30 m), --range-noise S (0-1 m), --map-drift D (0-10
-// deg per m) and --map-length L (1-20 m) from `args` into `options`; false,
+// --max-range M (1-30 m), --range-noise S (0-1 m), --fov F (10-360 deg),
+// --map-drift D (0-10 deg per m) and --map-length L (1-20 m) from `args`
+// into `options`; false,
 // with args.error() saying what is wrong, when one is out of range.
 bool SensorFromFlags(Flags& args, DatasetOptions* options);
 

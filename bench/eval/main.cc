@@ -69,6 +69,7 @@ void Usage(std::FILE* out) {
                "  would build them; place truth stays the logs'.\n"
                "      --max-range M: the logs read as by a laser that reaches M m (1-30; beyond: no return);\n"
                "      --range-noise S: Gaussian noise of S m added to every return (seeded by --seed);\n"
+               "      --fov F: only the beams within F/2 deg of the laser's heading (10-360; 360: all);\n"
                "      --map-drift D: each map built on odometry that drifts within it, up to D deg per metre\n"
                "      and 2 % of length, drawn once per map (0-10; seeded by --seed);\n"
                "      --map-length L: local maps of L m of travel (1-20; the protocol's 5), one every metre.\n"

@@ -1,13 +1,15 @@
 #!/bin/sh
 # lmd-eval reads a log as a shorter-range or noisier laser would see it
-# (--max-range, --range-noise), and its maps as a robot on drifting odometry
+# (--max-range, --range-noise) or a narrower one (--fov), and its maps as a robot on drifting odometry
 # (--map-drift) or one that sends shorter maps (--map-length) would build
 # them: a robot drives 8 m along x past a wall 2 m
 # to its right and one 8 m to its left. Read as it is, its maps hold both
 # walls; read with --max-range 5, the far wall's returns are no returns and
 # the near wall's within 5 m are left; with --range-noise 0.05, the near
 # wall's points spread across it by a few centimetres (the noise is along
-# each beam); with --map-drift 2, each map's near wall beside its route
+# each beam); with --fov 60, the beams within 30 deg of the heading alone
+# reach the near wall 3.46 m (2 / tan 30 deg) or more ahead, so no map holds
+# a point of it within 3 m of its first pose; with --map-drift 2, each map's near wall beside its route
 # bends away from y = -2 by tens of centimetres at its far end, while the
 # maps' frames and the place truth stay the log's; with --map-length 2.5,
 # twice as many maps (one per metre) of at most 2.5 m of travel each.
@@ -40,6 +42,12 @@ spread() {  # standard deviation of the near wall's y, in whole cm
 }
 spread_full=$(spread "$work/full/corridor.maps.txt")
 spread_noisy=$(spread "$work/noisy/corridor.maps.txt")
+"$eval_bin" export --log "$work/corridor.log" --fov 60 --out "$work/narrow" 2> /dev/null
+beside() { awk '$1 == "P" && $3 < 0 && $2 < 3' "$1" | wc -l; }  # near-wall points within 3 m of a map's frame
+beside_full=$(beside "$work/full/corridor.maps.txt")
+beside_narrow=$(beside "$work/narrow/corridor.maps.txt")
+near_narrow=$(awk '$1 == "P" && $3 < 0' "$work/narrow/corridor.maps.txt" | wc -l)
+echo "near wall within 3 m of a map's frame: $beside_full points as recorded, $beside_narrow with --fov 60 (of $near_narrow)"
 "$eval_bin" export --log "$work/corridor.log" --map-drift 2 --out "$work/drift" 2> /dev/null
 bend() {  # the largest distance from y = -2 of a near-wall point beside the 5 m a map drove, in whole cm
   awk '$1 == "P" && $3 < 0 && $2 >= 0 && $2 <= 5 { d = $3 + 2; if (d < 0) d = -d; if (d > m) m = d } END { printf "%d", 100 * m }' "$1"
@@ -61,6 +69,7 @@ echo "maps: $maps_full of up to $longest_full dm, $maps_short of up to $longest_
 echo "far wall points: $far_full as recorded, $far_short at 5 m; near wall: $near_full and $near_short"
 echo "near wall spread: $spread_full cm as recorded, $spread_noisy cm with 5 cm of noise"
 [ "$far_full" -gt 0 ] && [ "$near_full" -gt 0 ] && [ "$far_short" -eq 0 ] && [ "$near_short" -gt 0 ] &&
+  [ "$beside_full" -gt 0 ] && [ "$beside_narrow" -eq 0 ] && [ "$near_narrow" -gt 0 ] &&
   [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ] &&
   [ "$bend_full" -eq 0 ] && [ "$bend_drift" -ge 10 ] && [ "$same_frames" = yes ] && [ "$same_truth" = yes ] &&
   [ "$maps_short" -eq $((2 * maps_full)) ] && [ "$longest_full" -gt 25 ] && [ "$longest_short" -le 25 ]
