@@ -83,20 +83,24 @@ void AddRangeNoise(double sigma_m, uint64_t seed, LaserLog* log) {
   }
 }
 
-// Each scan cut to its beams within fov_deg / 2 of the laser's heading.
+// Each scan cut to its beams within fov_deg / 2 of the laser's heading. A
+// scan may start anywhere (a 360-deg lidar's at 0 rad): the kept beams are
+// ordered by their angle about the heading, so that they run on from the
+// first by the scan's own step even where the scan wrapped past 180 deg.
 void NarrowFieldOfView(double fov_deg, LaserLog* log) {
   const double half = fov_deg / 2 * M_PI / 180;
   for (Scan& scan : log->scans) {
-    std::vector<float> kept;
-    float first = 0.0f;
+    std::vector<std::pair<double, float>> kept;  // angle in (-pi, pi], range
     for (size_t b = 0; b < scan.ranges.size(); ++b) {
-      const double angle = scan.first_angle + static_cast<double>(b) * scan.angle_step;
-      if (std::abs(std::remainder(angle, 2 * M_PI)) > half) continue;
-      if (kept.empty()) first = static_cast<float>(angle);
-      kept.push_back(scan.ranges[b]);
+      const double angle = std::remainder(scan.first_angle + static_cast<double>(b) * scan.angle_step, 2 * M_PI);
+      if (std::abs(angle) <= half) kept.push_back({angle, scan.ranges[b]});
     }
-    scan.first_angle = first;
-    scan.ranges = std::move(kept);
+    std::sort(kept.begin(), kept.end(), [&](const auto& a, const auto& b) {
+      return scan.angle_step >= 0 ? a.first < b.first : a.first > b.first;
+    });
+    scan.first_angle = kept.empty() ? 0.0f : static_cast<float>(kept.front().first);
+    scan.ranges.clear();
+    for (const auto& beam : kept) scan.ranges.push_back(beam.second);
   }
 }
 

@@ -42,6 +42,26 @@ spread() {  # standard deviation of the near wall's y, in whole cm
 }
 spread_full=$(spread "$work/full/corridor.maps.txt")
 spread_noisy=$(spread "$work/noisy/corridor.maps.txt")
+# The same corridor seen by a 360-deg lidar whose scans start at 0 rad
+# (ROBOTLASER1, 1 deg per beam): --fov 60 keeps 330-359 deg and 0-30 deg,
+# which must stay on the right and the left of the heading.
+awk 'BEGIN {
+  for (i = 0; i < 40; i++) {
+    line = "ROBOTLASER1 0 0 6.283185 0.017453 30 0.01 0 360"
+    for (b = 0; b < 360; b++) {
+      s = sin(b * 3.14159265 / 180)
+      r = s < -1e-6 ? -2 / s : s > 1e-6 ? 8 / s : 30
+      line = line " " (r < 30 ? sprintf("%.3f", r) : "30.0")
+    }
+    x = i * 0.2
+    printf "%s 0 %.2f 0 0 %.2f 0 0 0 0 0 0 0 0 host 0\n", line, x, x
+  }
+}' > "$work/lidar.log"
+"$eval_bin" export --log "$work/lidar.log" --fov 60 --out "$work/lidar_narrow" 2> /dev/null
+between=$(awk '$1 == "P" && $3 > -1.5 && $3 < 7.5' "$work/lidar_narrow/lidar.maps.txt" | wc -l)
+lidar_right=$(awk '$1 == "P" && $3 < 0' "$work/lidar_narrow/lidar.maps.txt" | wc -l)
+lidar_beside=$(awk '$1 == "P" && $3 < 0 && $2 < 3' "$work/lidar_narrow/lidar.maps.txt" | wc -l)
+echo "360-deg lidar cut to 60 deg: $lidar_right near-wall points, $lidar_beside within 3 m of a map's frame, $between between the walls"
 "$eval_bin" export --log "$work/corridor.log" --fov 60 --out "$work/narrow" 2> /dev/null
 beside() { awk '$1 == "P" && $3 < 0 && $2 < 3' "$1" | wc -l; }  # near-wall points within 3 m of a map's frame
 beside_full=$(beside "$work/full/corridor.maps.txt")
@@ -70,6 +90,7 @@ echo "far wall points: $far_full as recorded, $far_short at 5 m; near wall: $nea
 echo "near wall spread: $spread_full cm as recorded, $spread_noisy cm with 5 cm of noise"
 [ "$far_full" -gt 0 ] && [ "$near_full" -gt 0 ] && [ "$far_short" -eq 0 ] && [ "$near_short" -gt 0 ] &&
   [ "$beside_full" -gt 0 ] && [ "$beside_narrow" -eq 0 ] && [ "$near_narrow" -gt 0 ] &&
+  [ "$lidar_right" -gt 0 ] && [ "$lidar_beside" -eq 0 ] && [ "$between" -eq 0 ] &&
   [ "$spread_full" -eq 0 ] && [ "$spread_noisy" -ge 2 ] && [ "$spread_noisy" -le 6 ] &&
   [ "$bend_full" -eq 0 ] && [ "$bend_drift" -ge 10 ] && [ "$same_frames" = yes ] && [ "$same_truth" = yes ] &&
   [ "$maps_short" -eq $((2 * maps_full)) ] && [ "$longest_full" -gt 25 ] && [ "$longest_short" -le 25 ]
