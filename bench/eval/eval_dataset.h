@@ -91,12 +91,12 @@ std::vector<std::string> WithSensorFlags(std::vector<std::string> valued);
 
 // --max-range M (1-30 m), --range-noise S (0-1 m), --fov F (10-360 deg),
 // --map-drift D (0-10 deg per m) and --map-length L (1-20 m) from `args`
-// into `options`; false,
-// with args.error() saying what is wrong, when one is out of range.
+// into `options`; false, with args.error() saying what is wrong, when one
+// is out of range.
 bool SensorFromFlags(Flags& args, DatasetOptions* options);
 
-// Reads the log, builds local maps (map_length_m every 1 m), ground truth, place truth
-// and simulated changes. IoError etc. from the reader.
+// Reads the log, builds local maps (map_length_m every 1 m), ground truth,
+// place truth and simulated changes. IoError etc. from the reader.
 Result<Dataset> LoadDataset(const std::string& log_path, const DatasetOptions& options);
 
 }  // namespace lmd::eval

@@ -244,6 +244,7 @@ PreparedMap CompletePreparation(PreparedMap grid, const LocalMap& map, std::opti
 }
 
 PreparedMap::Bend MapBend(const LocalMap& map) {
+  if (map.heading_drift_rad_per_m == 0) return {};  // a rigid map: no path to walk
   std::vector<Pose2> scan_poses;
   if (map.trajectory.empty()) {
     for (const Scan& scan : map.scans) scan_poses.push_back(scan.pose);
