@@ -139,6 +139,7 @@ Status SetConfigValue(const std::string& key, const std::string& value, ServerCo
   if (key == "descriptor_cache_entries") return SetUnsigned(key, value, &config->descriptor_cache_entries);
   if (key == "sync_writes") return SetBool(key, value, &config->sync_writes);
   if (key == "inner_words") return SetBool(key, value, &config->inner_words);
+  if (key == "paper_index") return SetBool(key, value, &config->paper_index);
   if (key == "allow_insecure_remote") return SetBool(key, value, &config->allow_insecure_remote);
   return Status::InvalidArgument("unknown setting '" + key + "'");
 }

@@ -124,6 +124,12 @@ struct ServerConfig {
   // core/describe/describer.h). Fixed when a store is created (a store made
   // with the other setting is refused). The default method does not use it.
   bool inner_words = false;
+  // false: lmdd keeps no index for the paper's methods (their LMD
+  // descriptor and postings); Retrieve and DetectChanges with a paper method
+  // fail with FAILED_PRECONDITION. For a fleet that asks the default method
+  // only: its inserts skip a tenth of a fleet's CPU (docs/capacity.md,
+  // twenty-fifth stop). Fixed when a store is created, as inner_words.
+  bool paper_index = true;
   // Memory (MiB) for stored maps prepared for scan matching (about 100-200
   // KB each; a map is prepared when it is inserted, and again on its first
   // hit after a restart or an eviction, 1-5 ms). 0: no cache.

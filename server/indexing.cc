@@ -21,7 +21,7 @@ DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config, bool
   const LocalMap view = MethodView(map);
   DescribedMap described;
   described.place = PreparePlace(view, config.localize);
-  if (with_lmd) described.lmd = DescribeForIndex(view, config, &described.place);
+  if (with_lmd && config.paper_index) described.lmd = DescribeForIndex(view, config, &described.place);
   return described;
 }
 
@@ -30,9 +30,10 @@ LocalMap MethodView(LocalMap map) {
   return map;
 }
 
-IndexingConfig ProductIndexing(bool inner_words) {
+IndexingConfig ProductIndexing(bool inner_words, bool paper_index) {
   IndexingConfig config;
   if (inner_words) config.describer = WithInnerWords(config.describer);
+  config.paper_index = paper_index;
   return config;
 }
 
@@ -49,6 +50,8 @@ std::string Fingerprint(const IndexingConfig& config) {
   if (inner) out << " inner=" << d.inner_radius_m;
   out << " codec=" << (inner ? 2 : 1) << " pose_quantum=" << config.index.pose_quantum_m
       << " W=" << config.index.pyramid_cell_m << " L=" << config.index.pyramid_levels;
+  // As for inner words: stores with the paper's index keep their line.
+  if (!config.paper_index) out << " paper_index=0";
   return out.str();
 }
 

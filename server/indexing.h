@@ -26,10 +26,15 @@ struct IndexingConfig {
   // The default method (core/localize): its place features and map
   // preparation are computed at insert; the rest applies per query.
   LocalizeOptions localize;
+  // false: maps are stored without the paper's descriptor and postings (an
+  // empty one each), and the paper's methods are refused (ServerConfig::
+  // paper_index).
+  bool paper_index = true;
 };
 
-// The product's indexing, with or without inner words (ServerConfig::inner_words).
-IndexingConfig ProductIndexing(bool inner_words);
+// The product's indexing, with or without inner words and the paper's index
+// (ServerConfig::inner_words, paper_index).
+IndexingConfig ProductIndexing(bool inner_words, bool paper_index = true);
 
 // The planned frame and descriptor of `map` (in its own frame). `place`:
 // the same map's PreparePlace, if computed already (its compass is reused).
@@ -44,7 +49,7 @@ struct DescribedMap {
   std::optional<Lmd> lmd;
   PreparedPlace place;
 };
-// Both (the descriptor only `with_lmd`) of `map` as the method sees it (MethodView).
+// Both (the descriptor only `with_lmd` and config.paper_index) of `map` as the method sees it (MethodView).
 DescribedMap DescribeMap(const LocalMap& map, const IndexingConfig& config, bool with_lmd);
 
 // `map` as lmdd's method sees it: its points deduplicated on the local-map

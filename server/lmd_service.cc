@@ -112,7 +112,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     *write.map.mutable_metadata() = request->metadata();
     *write.map.mutable_map() = request->map();
     DescriptorCache::Key& key = keys.emplace_back();
-    described.push_back(Describe(request->map(), /*with_lmd=*/true, &key));
+    described.push_back(Describe(request->map(), /*with_lmd=*/store_->indexing().paper_index, &key));
     // The anchor (output only): the robot's pose hint, or where lmdd has
     // just localised this very map against the collection's anchored maps.
     v1::MapMetadata* meta = write.map.mutable_metadata();
@@ -122,7 +122,7 @@ Status LmdServiceImpl::Insert(std::vector<const v1::InsertMapRequest*> requests,
     } else if (std::optional<v1::MapAnchor> fix = fixes_.Find(meta->collection(), key)) {
       *meta->mutable_anchor() = *fix;
     }
-    write.lmd = *described.back()->lmd;
+    write.lmd = described.back()->lmd.value_or(Lmd{});  // empty without the paper's index
     write.place = described.back()->place.features;
     maps.push_back(std::move(write));
   }

@@ -177,6 +177,10 @@ Result<LmdServiceImpl::Query> LmdServiceImpl::RunQuery(const QueryRequest& reque
   if (!default_method) {
     paper_method = PaperMethod(request.method, store_->indexing().viewpoint.planner);
     if (!paper_method.ok()) return paper_method.status();
+    if (!store_->indexing().paper_index) {
+      return Status::FailedPrecondition(
+          "this lmdd keeps no index for the paper's methods (paper_index = false): ask with the default method");
+    }
   }
   if (!store_->HasCollection(collection)) return Status::NotFound("unknown collection '" + collection + "'");
   if (request.prior != nullptr && !store_->HasAnchors(collection)) {

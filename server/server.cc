@@ -117,7 +117,7 @@ Result<std::unique_ptr<LmdServer>> LmdServer::Start(const ServerConfig& config) 
   MapStoreOptions store_options;
   store_options.data_dir = config.data_dir;
   store_options.sync_writes = config.sync_writes;
-  store_options.indexing = ProductIndexing(config.inner_words);
+  store_options.indexing = ProductIndexing(config.inner_words, config.paper_index);
   Result<std::unique_ptr<MapStore>> store = MapStore::Open(store_options);
   if (!store.ok()) return store.status();
   server->store_ = std::move(store).value();

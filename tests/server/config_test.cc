@@ -87,6 +87,21 @@ TEST(ConfigTest, InnerWordsChooseTheStoresDescriptor) {
             "raster=0.01 interest_cell=0.5 max_features=80 codec=1 pose_quantum=0.05 W=5 L=2");
 }
 
+TEST(ConfigTest, PaperIndexIsOnUnlessSetOff) {
+  ServerConfig config;
+  EXPECT_TRUE(config.paper_index);
+  ASSERT_TRUE(SetConfigValue("paper_index", "false", &config).ok());
+  EXPECT_FALSE(config.paper_index);
+  EXPECT_FALSE(SetConfigValue("paper_index", "no thanks", &config).ok());
+  EXPECT_TRUE(ProductIndexing(false).paper_index);
+  const IndexingConfig off = ProductIndexing(false, false);
+  EXPECT_FALSE(off.paper_index);
+  // A store made without the index is refused by an lmdd that keeps one, and
+  // the other way round; stores made before the setting keep their line.
+  EXPECT_NE(Fingerprint(off), Fingerprint(ProductIndexing(false)));
+  EXPECT_EQ(Fingerprint(off), Fingerprint(ProductIndexing(false)) + " paper_index=0");
+}
+
 TEST(ConfigTest, LoopbackAddressesAreRecognised) {
   EXPECT_TRUE(IsLoopbackAddress("127.0.0.1:50051"));
   EXPECT_TRUE(IsLoopbackAddress("localhost:1"));

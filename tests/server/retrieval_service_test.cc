@@ -142,6 +142,64 @@ TEST_F(RetrievalServiceTest, BadQueriesGetClearErrors) {
   EXPECT_NE(status.error_message().find("not served"), std::string::npos) << status.error_message();
 }
 
+// paper_index = false: maps are stored without the paper's descriptor and
+// postings; the default method answers as before, the paper's methods are
+// refused, and the store reopens with that setting only.
+TEST(PaperIndexOffTest, TheDefaultMethodAnswersAndThePapersAreRefused) {
+  TempDir dir;
+  server::ServerConfig config;
+  config.paper_index = false;
+  v1::RetrieveRequest query;
+  query.set_collection("site");
+  *query.mutable_map() = CornerMap(3.0, -1.0);
+  {
+    TestServer server(dir.path(), config);
+    ASSERT_TRUE(server.ok());
+    v1::InsertMapsRequest insert;
+    *insert.add_maps() = OneMapRequest("site", "corner", CornerMap(0, 0)).maps(0);
+    *insert.add_maps() = OneMapRequest("site", "room", SquareRoomMap(200)).maps(0);
+    v1::InsertMapsResponse inserted;
+    ASSERT_TRUE(server.client().InsertMaps(insert, &inserted).ok());
+    v1::ListCollectionsResponse collections;
+    ASSERT_TRUE(server.client().ListCollections(&collections).ok());
+    ASSERT_EQ(collections.collections_size(), 1);
+    EXPECT_EQ(collections.collections(0).maps(), 2u);
+    EXPECT_EQ(collections.collections(0).postings(), 0u);
+
+    v1::RetrieveResponse response;
+    ASSERT_TRUE(server.client().Retrieve(query, &response).ok());
+    ASSERT_GE(response.hits_size(), 1);
+    EXPECT_EQ(response.hits(0).map_id(), "corner");
+    EXPECT_NEAR(response.hits(0).pose().x(), -3.0, 0.05);
+
+    v1::RetrieveRequest paper = query;
+    paper.set_method(v1::METHOD_BOW);
+    grpc::Status status = server.client().Retrieve(paper, &response);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+    EXPECT_NE(status.error_message().find("paper_index = false"), std::string::npos) << status.error_message();
+    v1::DetectChangesRequest changes;
+    changes.set_collection("site");
+    *changes.mutable_map() = CornerMap(0, 0);
+    changes.set_method(ViewpointOptions().planner == Planner::kCoG ? v1::METHOD_LMD_COG : v1::METHOD_LMD_COR);
+    v1::DetectChangesResponse detected;
+    status = server.client().DetectChanges(changes, &detected);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+  }
+  // An lmdd with the paper's index refuses the store: its maps have no descriptors.
+  server::ServerConfig with_paper;
+  with_paper.listen = "127.0.0.1:0";
+  with_paper.data_dir = dir.path();
+  const auto refused = server::LmdServer::Start(with_paper);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("paper_index=0"), std::string::npos) << refused.status().message();
+  TestServer restarted(dir.path(), config);
+  ASSERT_TRUE(restarted.ok());
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(restarted.client().Retrieve(query, &response).ok());
+  ASSERT_GE(response.hits_size(), 1);
+  EXPECT_EQ(response.hits(0).map_id(), "corner");
+}
+
 // Thousands of points scattered over 180 m: within every limit, but the
 // worst case of scan matching (nothing to prune), which ran for seconds to
 // minutes. max_query_seconds ends it with DEADLINE_EXCEEDED.
