@@ -15,6 +15,7 @@
 #include "core/util/host_port.h"
 #include "core/util/split.h"
 #include "server/grpc_status.h"
+#include "server/indexing.h"
 
 namespace lmd::server::cluster {
 namespace {
@@ -24,6 +25,14 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kCopyChunkMaps = 64;
 constexpr auto kMaintainEvery = std::chrono::milliseconds(250);
 constexpr int kCatchUpTimeoutMs = 600000;  // a whole collection's copy
+
+// A node's copy is of use only to nodes that index as it does (Fingerprint):
+// `theirs` (empty: a node older than the check) against `ours`.
+Status SameIndexing(const std::string& theirs, const std::string& ours, const std::string& whose) {
+  if (theirs.empty() || theirs == ours) return Status::Ok();
+  return Status::FailedPrecondition("other indexing settings: " + whose + " uses (" + theirs + "), this node (" + ours +
+                                    "); nodes of one cluster must be set alike");
+}
 
 
 // A stored map as a copy receives it, and back.
@@ -445,6 +454,7 @@ Status ClusterNode::WriteAsPrimary(const std::string& collection,
   write.set_epoch(mark.epoch);
   write.set_seq(mark.seq);
   write.set_prev_epoch(last.epoch);
+  write.set_indexing(Fingerprint(store_->indexing()));
   Status applied = apply(mark, &write);
   if (!applied.ok()) return applied;
   if (write.maps_size() == 0 && write.deleted_map_ids_size() == 0) return Status::Ok();  // nothing written
@@ -562,6 +572,8 @@ void ClusterNode::RefreshPlacement(const std::string& collection) {
 }
 
 Status ClusterNode::Apply(const internal::ApplyRequest& write, internal::ApplyResponse* response) {
+  Status alike = SameIndexing(write.indexing(), Fingerprint(store_->indexing()), "the primary");
+  if (!alike.ok()) return alike;
   Writer& writer = WriterOf(write.collection());  // one write of a collection at a time, here too
   std::lock_guard<std::mutex> write_lock(writer.mu);
   {
@@ -632,7 +644,11 @@ internal::ReplicaStateResponse ClusterNode::State(const std::string& collection)
   return out;
 }
 
-Status ClusterNode::Copy(const std::string& collection, const std::function<bool(const internal::CopyChunk&)>& send) {
+Status ClusterNode::Copy(const internal::CopyRequest& request,
+                         const std::function<bool(const internal::CopyChunk&)>& send) {
+  Status alike = SameIndexing(request.indexing(), Fingerprint(store_->indexing()), "the copying node");
+  if (!alike.ok()) return alike;
+  const std::string& collection = request.collection();
   ReplicationMark mark;
   Status walked = store_->ForEachMap(
       collection, kCopyChunkMaps,
@@ -666,6 +682,8 @@ Status ClusterNode::Copy(const std::string& collection, const std::function<bool
 }
 
 Status ClusterNode::Join(const internal::JoinRequest& request) {
+  Status alike = SameIndexing(request.indexing(), Fingerprint(store_->indexing()), "node " + request.node_id());
+  if (!alike.ok()) return alike;
   const std::string& collection = request.collection();
   Writer& writer = WriterOf(collection);
   std::lock_guard<std::mutex> write_lock(writer.mu);
@@ -823,6 +841,7 @@ Status ClusterNode::CatchUp(const std::string& collection, const internal::Place
     request.set_node_id(node_id_);
     request.set_epoch(mark.epoch);
     request.set_seq(mark.seq);
+    request.set_indexing(Fingerprint(store_->indexing()));
     grpc::ClientContext context;
     Prepare(&context, kCatchUpTimeoutMs);
     internal::JoinResponse response;
@@ -852,6 +871,7 @@ Status ClusterNode::CopyFrom(const std::string& collection, const std::string& a
   Prepare(&context, kCatchUpTimeoutMs);
   internal::CopyRequest request;
   request.set_collection(collection);
+  request.set_indexing(Fingerprint(store_->indexing()));
   if (!Track(&context)) return Status::Cancelled("stopping");
   struct Untrack {
     ClusterNode* node;

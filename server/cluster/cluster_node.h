@@ -91,10 +91,13 @@ class ClusterNode {
   // epoch, a gap in the numbers, or a write that does not follow this copy's
   // own last one (it applied another primary's write of that number: it has
   // diverged); the primary then drops it from in-sync and it catches up.
+  // Apply, Copy and Join refuse (FailedPrecondition) a node that indexes
+  // otherwise (server/indexing.h's Fingerprint): such a copy could not
+  // answer as its primary does, so it never joins.
   Status Apply(const internal::ApplyRequest& write, internal::ApplyResponse* response);
   internal::ReplicaStateResponse State(const std::string& collection) const;
   // On the primary: the collection from one snapshot, to a catching-up copy.
-  Status Copy(const std::string& collection, const std::function<bool(const internal::CopyChunk&)>& send);
+  Status Copy(const internal::CopyRequest& request, const std::function<bool(const internal::CopyChunk&)>& send);
   // On the primary: sends `request.node_id` the writes after its mark and
   // adds it to the in-sync set, with no write in between. FailedPrecondition
   // "copy needed" when the log cannot bring it up to date.

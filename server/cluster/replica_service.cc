@@ -30,7 +30,7 @@ grpc::Status ReplicaService::Copy(grpc::ServerContext* context, const internal::
                                   grpc::ServerWriter<internal::CopyChunk>* writer) {
   Status allowed = Allowed(context, request->collection());
   if (!allowed.ok()) return ToGrpcStatus(allowed);
-  return ToGrpcStatus(node_->Copy(request->collection(), [&](const internal::CopyChunk& chunk) {
+  return ToGrpcStatus(node_->Copy(*request, [&](const internal::CopyChunk& chunk) {
     return !context->IsCancelled() && writer->Write(chunk);
   }));
 }

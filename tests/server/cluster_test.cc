@@ -30,8 +30,9 @@ class ClusterTest : public ::testing::Test {
     for (int i = 0; i < 3; ++i) StartNode(i);
   }
 
-  void StartNode(int i) {
+  void StartNode(int i, bool paper_index = true) {
     server::ServerConfig config;
+    config.paper_index = paper_index;
     config.listen = Address(i);
     config.data_dir = dirs_[i]->path();
     config.cluster_etcd = etcd_->endpoint(0);
@@ -238,6 +239,22 @@ TEST_F(ClusterTest, ARoutingClientReachesTheCopiesWithoutItsEntryNode) {
     const grpc::Status read = routed->GetMap(get, &got);
     EXPECT_TRUE(read.ok()) << read.error_message();
   }
+}
+
+// A node whose store indexes otherwise (here without the paper's index)
+// would hold copies that answer otherwise: it is refused every write and
+// copy, and the others acknowledge the writes without it.
+TEST_F(ClusterTest, ANodeIndexedOtherwiseNeverHoldsACopy) {
+  nodes_[2]->Shutdown(std::chrono::milliseconds(0));
+  nodes_[2].reset();
+  dirs_[2] = std::make_unique<TempDir>();
+  StartNode(2, /*paper_index=*/false);
+  const std::set<std::string> written{"m1", "m2", "m3"};
+  for (const std::string& id : written) ASSERT_TRUE(Insert(id, 0)) << id;  // node 0 is the primary
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // node 2's catch-up tries meanwhile
+  EXPECT_EQ(Held(0), written);
+  EXPECT_EQ(Held(1), written);
+  EXPECT_TRUE(Held(2).empty());
 }
 
 TEST_F(ClusterTest, ANodeForwardsWhatItDoesNotServeAndARunningAloneNodeSaysSo) {
