@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "core/align/correlative_search.h"
 #include "core/align/icp.h"
@@ -20,6 +22,38 @@ constexpr size_t kSiteMapsPerCell = 32;
 // degree either way (the site's lattice step) before ICP.
 constexpr double kPickWindowM = 0.2;
 constexpr double kPickWindowDeg = 1.0;
+
+// The site's points are thinned to one per 5 cm cell before the grid is
+// built: where a fleet piles up maps of one place, dozens of maps' points lie
+// on each wall, and the grid's cost is linear in them.
+constexpr double kThinCellM = 0.05;
+
+// Which kThinCellM cells of a square (corner x0, y0, side metres) hold a
+// point already. Scratch per thread: one bit per cell.
+class SiteThinning {
+ public:
+  SiteThinning(double x0, double y0, double side) : x0_(x0), y0_(y0) {
+    cells_ = static_cast<int64_t>(std::ceil(side / kThinCellM)) + 1;
+    bits_.assign(static_cast<size_t>((cells_ * cells_ + 63) / 64), 0);
+  }
+  // True for the first point of its cell (outside the square: always).
+  bool First(const Point2& p) {
+    const int64_t ix = static_cast<int64_t>(std::floor((p.x - x0_) / kThinCellM));
+    const int64_t iy = static_cast<int64_t>(std::floor((p.y - y0_) / kThinCellM));
+    if (ix < 0 || iy < 0 || ix >= cells_ || iy >= cells_) return true;
+    const uint64_t k = static_cast<uint64_t>(iy * cells_ + ix);
+    const uint64_t bit = uint64_t{1} << (k % 64);
+    if (bits_[k / 64] & bit) return false;
+    bits_[k / 64] |= bit;
+    return true;
+  }
+
+ private:
+  double x0_, y0_;
+  int64_t cells_ = 0;
+  static thread_local std::vector<uint64_t> bits_;
+};
+thread_local std::vector<uint64_t> SiteThinning::bits_;
 
 // An anchored map near the prior, prepared.
 struct NearMap {
@@ -61,12 +95,16 @@ std::vector<LocalizedHit> MatchOnSiteGrid(const LocalQuery& query, const MapSour
     if (std::shared_ptr<const PreparedMap> db = source.Prepared(a.map_id)) near.push_back({a, std::move(db)});
   }
   // Their points there, in the collection's frame (each map's sparse points:
-  // one per 0.3 m, within the likelihood kernel's reach of each other).
+  // one per 0.3 m, within the likelihood kernel's reach of each other), the
+  // first in each kThinCellM cell only.
   std::vector<Point2> site_points;
+  SiteThinning thinning(prior.pose.x - half, prior.pose.y - half, 2 * half);
   for (const NearMap& m : near) {
+    const PointTransform to_site(m.anchored.pose);
     for (const Point2& p : m.db->sparse_points) {
-      const Point2 s = TransformPoint(m.anchored.pose, p);
-      if (std::abs(s.x - prior.pose.x) <= half && std::abs(s.y - prior.pose.y) <= half) site_points.push_back(s);
+      const Point2 at = to_site(p);
+      if (std::abs(at.x - prior.pose.x) > half || std::abs(at.y - prior.pose.y) > half) continue;
+      if (thinning.First(at)) site_points.push_back(at);
     }
   }
   const PreparedMap site = PrepareSearchGrid(site_points, options.match.map);

@@ -29,11 +29,20 @@ inline Pose2 Inverse(const Pose2& a) {
   return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), NormalizeAngle(-a.theta)};
 }
 
+// Points of frame a expressed in a's parent frame, the sine and cosine
+// computed once for all of them.
+class PointTransform {
+ public:
+  explicit PointTransform(const Pose2& a) : a_(a), c_(std::cos(a.theta)), s_(std::sin(a.theta)) {}
+  Point2 operator()(const Point2& p) const { return {a_.x + c_ * p.x - s_ * p.y, a_.y + s_ * p.x + c_ * p.y}; }
+
+ private:
+  Pose2 a_;
+  double c_, s_;
+};
+
 // Point p (in frame a) expressed in a's parent frame.
-inline Point2 TransformPoint(const Pose2& a, const Point2& p) {
-  const double c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * p.x - s * p.y, a.y + s * p.x + c * p.y};
-}
+inline Point2 TransformPoint(const Pose2& a, const Point2& p) { return PointTransform(a)(p); }
 
 // Median of each component of `poses` (the upper one for an even count);
 // headings as given, so wrap them around a common reference first. Empty
