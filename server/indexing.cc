@@ -38,6 +38,8 @@ IndexingConfig ProductIndexing(bool inner_words, bool paper_index) {
 }
 
 std::string Fingerprint(const IndexingConfig& config) {
+  // Without the paper's index no stored record depends on the settings below.
+  if (!config.paper_index) return "paper_index=0";
   const DescriberOptions& d = config.describer;
   std::ostringstream out;
   out << "planner=" << PlannerName(config.viewpoint.planner) << " projection_version=" << kProjectionVersion
@@ -50,8 +52,6 @@ std::string Fingerprint(const IndexingConfig& config) {
   if (inner) out << " inner=" << d.inner_radius_m;
   out << " codec=" << (inner ? 2 : 1) << " pose_quantum=" << config.index.pose_quantum_m
       << " W=" << config.index.pyramid_cell_m << " L=" << config.index.pyramid_levels;
-  // As for inner words: stores with the paper's index keep their line.
-  if (!config.paper_index) out << " paper_index=0";
   return out.str();
 }
 
