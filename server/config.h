@@ -127,7 +127,7 @@ struct ServerConfig {
   // false: lmdd keeps no index for the paper's methods (their LMD
   // descriptor and postings); Retrieve and DetectChanges with a paper method
   // fail with FAILED_PRECONDITION. For a fleet that asks the default method
-  // only: its inserts skip a tenth of a fleet's CPU (docs/capacity.md,
+  // only: 15 % less lmdd CPU per robot tick, measured (docs/capacity.md,
   // twenty-fifth stop). Fixed when a store is created, as inner_words.
   bool paper_index = true;
   // Memory (MiB) for stored maps prepared for scan matching (about 100-200
