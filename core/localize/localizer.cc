@@ -190,6 +190,11 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // points (min_sure_points).
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
+  const double unexamined = out->stats.unexamined_votes;
+  const double lead = options.sure_vote_lead;
+  if (lead > 0 && unexamined > 0 && !hits.empty() && hits[0].votes - unexamined < lead) {
+    out->verdict.sure = false;
+  }
   if (!hits.empty() && hits[0].db) {
     out->verdict.pose_covariance =
         PoseCovariance(query.match.points, *hits[0].db, hits[0].pose, options.refine, options.pose_covariance);
@@ -482,6 +487,31 @@ std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSo
   return hits;
 }
 
+// Each hit's votes made its map's most (`all` is in order of votes), and
+// the most votes of a map not looked at: neither among the first
+// `fit_ranked` maps of the first `read` hypotheses (RankByFit's) nor
+// verified. A search that returned `max_hypotheses` may have cut maps with
+// as many votes as its last.
+double MarkVotes(const std::vector<PlaceHypothesis>& all, size_t max_hypotheses, size_t read, size_t fit_ranked,
+                 const std::vector<Candidate>& verified, std::vector<LocalizedHit>* hits) {
+  std::unordered_map<uint64_t, double> most;  // map id -> its most votes
+  for (const PlaceHypothesis& h : all) most.emplace(h.map_id, h.votes);
+  for (LocalizedHit& hit : *hits) {
+    const auto it = most.find(hit.map_id);
+    if (it != most.end()) hit.votes = it->second;
+  }
+  std::unordered_set<uint64_t> examined;
+  for (const Candidate& c : verified) examined.insert(c.map_id);
+  std::unordered_set<uint64_t> ranked;
+  for (size_t i = 0; i < read && i < all.size(); ++i) {
+    if (ranked.size() < fit_ranked || ranked.count(all[i].map_id)) ranked.insert(all[i].map_id);
+  }
+  for (const PlaceHypothesis& h : all) {
+    if (!examined.count(h.map_id) && !ranked.count(h.map_id)) return h.votes;
+  }
+  return all.size() >= max_hypotheses && !all.empty() ? all.back().votes : 0.0;
+}
+
 }  // namespace
 
 std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSource& source,
@@ -511,6 +541,8 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
     }
     SortHits(&hits, options);
   }
+  stats->unexamined_votes = MarkVotes(all, search.max_hypotheses, second_round ? all.size() : first.size(),
+                                      second_round ? all.size() : options.fit_rank_maps, verified, &hits);
   if (trace) {
     trace->hypotheses = second_round ? std::move(all) : std::move(first);
     trace->verified = std::move(verified);

@@ -188,6 +188,9 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   judged.changes_place_fit_before_conflicts = false;  // a hit's overlap is the newest map's, its score the sequence's
   judged.confidence.min_score = std::max(options.confidence.min_score, options.confidence.sequence_min_score);
   judged.confidence.min_global_probability = 0.0;  // fitted to single maps' scores, not a sequence's mean
+  // Its hypotheses come from every map's search and are checked through all
+  // of them: no one search's votes speak for the places it left out.
+  judged.sure_vote_lead = 0;
   // The newest map's best fit elsewhere in the best hit's map is a rival: in
   // a corridor every map of the sequence may fit as well shifted along it
   // (the odometry moves them together), and only that shift tells.
