@@ -65,6 +65,7 @@ void ToWire(const Verdict& verdict, const std::vector<std::string>& hit_ids, v1:
   out->set_sequence_maps(static_cast<uint32_t>(verdict.sequence_maps));
   out->set_sequence_agreeing(static_cast<uint32_t>(verdict.sequence_agreeing));
   out->set_slide_margin(verdict.slide_margin);
+  if (verdict.vote_lead) out->set_vote_lead(*verdict.vote_lead);
   if (!hit_ids.empty()) *out->mutable_pose_covariance() = ToProto(verdict.pose_covariance);
   if (verdict.collection_pose && verdict.collection_pose_hit < hit_ids.size() &&
       !hit_ids[verdict.collection_pose_hit].empty()) {

@@ -152,6 +152,10 @@ struct Verdict {
   // sure needs min_slide_margin): looked for only where it decides, in an
   // answer otherwise sure (0 elsewhere).
   double slide_margin = 0.0;
+  // A global answer whose search left maps it did not look at: its map's
+  // first-stage votes less the most of such a map (sure needs
+  // LocalizeOptions::sure_vote_lead). Absent elsewhere.
+  std::optional<double> vote_lead;
   bool prior_used = false;   // a prior query (prior.h)
   bool prior_failed = false; // ... and no map near the prior matched
   bool fell_back_to_global = false;  // ... so a global query answered (lmdd, on request)

@@ -190,10 +190,9 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // points (min_sure_points).
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
-  const double unexamined = out->stats.unexamined_votes;
-  const double lead = options.sure_vote_lead;
-  if (lead > 0 && unexamined > 0 && !hits.empty() && hits[0].votes - unexamined < lead) {
-    out->verdict.sure = false;
+  if (out->stats.unexamined_votes > 0 && !hits.empty()) {
+    out->verdict.vote_lead = hits[0].votes - out->stats.unexamined_votes;
+    if (options.sure_vote_lead > 0 && *out->verdict.vote_lead < options.sure_vote_lead) out->verdict.sure = false;
   }
   if (!hits.empty() && hits[0].db) {
     out->verdict.pose_covariance =

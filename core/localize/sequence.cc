@@ -190,7 +190,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   judged.confidence.min_global_probability = 0.0;  // fitted to single maps' scores, not a sequence's mean
   // Its hypotheses come from every map's search and are checked through all
   // of them: no one search's votes speak for the places it left out.
-  judged.sure_vote_lead = 0;
+  out.stats.unexamined_votes = 0;
   // The newest map's best fit elsewhere in the best hit's map is a rival: in
   // a corridor every map of the sequence may fit as well shifted along it
   // (the odometry moves them together), and only that shift tells.

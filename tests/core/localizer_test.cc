@@ -1226,6 +1226,8 @@ TEST(LocalizerTest, AnAnswerIsNotSureWhereAMapNotLookedAtHasAsManyVotes) {
   EXPECT_GT(looked_at_one.verdict.best_score, 0.9);
   EXPECT_GT(looked_at_one.stats.unexamined_votes, 0.0);
   EXPECT_EQ(looked_at_one.hits[0].votes, looked_at_one.stats.unexamined_votes);
+  ASSERT_TRUE(looked_at_one.verdict.vote_lead.has_value());
+  EXPECT_EQ(*looked_at_one.verdict.vote_lead, 0.0);
   EXPECT_FALSE(looked_at_one.verdict.sure);
 
   LocalizeOptions no_lead = one_map;
@@ -1235,6 +1237,7 @@ TEST(LocalizerTest, AnAnswerIsNotSureWhereAMapNotLookedAtHasAsManyVotes) {
   const Localization looked_at_both = LocalizeIn(twins, query);
   EXPECT_EQ(looked_at_both.hits.size(), 2u);
   EXPECT_EQ(looked_at_both.stats.unexamined_votes, 0.0);
+  EXPECT_FALSE(looked_at_both.verdict.vote_lead.has_value());
   EXPECT_TRUE(looked_at_both.verdict.sure);
 }
 

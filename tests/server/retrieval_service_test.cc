@@ -321,6 +321,31 @@ TEST_F(RetrievalServiceTest, RequestChoosesHowManyMapsAreVerified) {
   EXPECT_NE(status.error_message().find("max_verify_candidates"), std::string::npos) << status.error_message();
 }
 
+// Seventy shifted copies of one map: the search looks at the first maps by
+// votes and not at the rest, so the answer says by how much its map leads
+// them, and is sure only with a lead of two votes (the rule itself:
+// LocalizerTest.AnAnswerIsNotSureWhereAMapNotLookedAtHasAsManyVotes). With
+// two maps stored every map is looked at and the lead is absent.
+TEST_F(RetrievalServiceTest, AGlobalAnswerSaysItsLeadOverTheMapsItDidNotLookAt) {
+  v1::RetrieveResponse few;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(1.0, 1.0)), &few).ok());
+  ASSERT_GT(few.hits_size(), 0);
+  EXPECT_FALSE(few.localization().has_vote_lead());
+
+  v1::InsertMapsRequest insert;
+  for (int i = 0; i < 70; ++i) {
+    *insert.add_maps() = OneMapRequest("site", "copy" + std::to_string(i), CornerMap(0.1 * i, -0.1 * i)).maps(0);
+  }
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(insert, &inserted).ok());
+  v1::RetrieveResponse many;
+  ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(1.0, 1.0)), &many).ok());
+  ASSERT_GT(many.hits_size(), 0);
+  ASSERT_TRUE(many.localization().has_vote_lead());
+  EXPECT_GT(many.localization().vote_lead(), 0.0);  // the copy the query fits best leads
+  if (many.localization().localized()) EXPECT_GE(many.localization().vote_lead(), 2.0);
+}
+
 TEST_F(RetrievalServiceTest, TopKZeroMeansTheDefault) {
   v1::RetrieveResponse response;
   ASSERT_TRUE(server_->client().Retrieve(Query(CornerMap(0, 0), 0), &response).ok());
