@@ -190,6 +190,8 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // points (min_sure_points).
   const bool cannot_be_sure = StopAsked(options) || query.match.points.size() < options.min_sure_points;
   if (cannot_be_sure) out->verdict.sure = false;
+  // Nor one whose map the votes do not single out (sure_vote_lead): a map
+  // never looked at may show another place that fits as well.
   if (out->stats.unexamined_votes > 0 && !hits.empty()) {
     out->verdict.vote_lead = hits[0].votes - out->stats.unexamined_votes;
     if (options.sure_vote_lead > 0 && *out->verdict.vote_lead < options.sure_vote_lead) out->verdict.sure = false;
@@ -486,27 +488,35 @@ std::vector<LocalizedHit> VerifySecondRound(const LocalQuery& query, const MapSo
   return hits;
 }
 
-// Each hit's votes made its map's most (`all` is in order of votes), and
-// the most votes of a map not looked at: neither among the first
-// `fit_ranked` maps of the first `read` hypotheses (RankByFit's) nor
-// verified. A search that returned `max_hypotheses` may have cut maps with
-// as many votes as its last.
-double MarkVotes(const std::vector<PlaceHypothesis>& all, size_t max_hypotheses, size_t read, size_t fit_ranked,
-                 const std::vector<Candidate>& verified, std::vector<LocalizedHit>* hits) {
-  std::unordered_map<uint64_t, double> most;  // map id -> its most votes
+// Each hit's votes made those of its map's most voted hypothesis (`all`
+// comes best first, by votes).
+void SetMapVotes(const std::vector<PlaceHypothesis>& all, std::vector<LocalizedHit>* hits) {
+  std::unordered_map<uint64_t, double> most;  // map id -> its first, most voted, hypothesis's votes
   for (const PlaceHypothesis& h : all) most.emplace(h.map_id, h.votes);
   for (LocalizedHit& hit : *hits) {
     const auto it = most.find(hit.map_id);
     if (it != most.end()) hit.votes = it->second;
   }
-  std::unordered_set<uint64_t> examined;
-  for (const Candidate& c : verified) examined.insert(c.map_id);
-  std::unordered_set<uint64_t> ranked;
-  for (size_t i = 0; i < read && i < all.size(); ++i) {
-    if (ranked.size() < fit_ranked || ranked.count(all[i].map_id)) ranked.insert(all[i].map_id);
+}
+
+// The maps RankByFit reads of the first `read` hypotheses (in vote order):
+// the first `maps` distinct ones.
+void AddFirstMaps(const std::vector<PlaceHypothesis>& hypotheses, size_t read, size_t maps,
+                  std::unordered_set<uint64_t>* ids) {
+  std::unordered_set<uint64_t> first;
+  for (size_t i = 0; i < read && i < hypotheses.size(); ++i) {
+    if (first.size() >= maps && !first.count(hypotheses[i].map_id)) break;
+    first.insert(hypotheses[i].map_id);
   }
+  ids->insert(first.begin(), first.end());
+}
+
+// The most votes of a map in `all` not `looked_at`. A search that returned
+// its `max_hypotheses` may have cut maps with as many votes as its last.
+double UnexaminedVotes(const std::vector<PlaceHypothesis>& all, size_t max_hypotheses,
+                       const std::unordered_set<uint64_t>& looked_at) {
   for (const PlaceHypothesis& h : all) {
-    if (!examined.count(h.map_id) && !ranked.count(h.map_id)) return h.votes;
+    if (!looked_at.count(h.map_id)) return h.votes;
   }
   return all.size() >= max_hypotheses && !all.empty() ? all.back().votes : 0.0;
 }
@@ -540,8 +550,14 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
     }
     SortHits(&hits, options);
   }
-  stats->unexamined_votes = MarkVotes(all, search.max_hypotheses, second_round ? all.size() : first.size(),
-                                      second_round ? all.size() : options.fit_rank_maps, verified, &hits);
+  // The maps looked at: verified, or fit ranked (RankByFit: the first
+  // fit_rank_maps of the first round, every map in the second).
+  std::unordered_set<uint64_t> looked_at;
+  for (const Candidate& c : verified) looked_at.insert(c.map_id);
+  AddFirstMaps(all, second_round ? all.size() : first.size(), second_round ? all.size() : options.fit_rank_maps,
+               &looked_at);
+  SetMapVotes(all, &hits);
+  stats->unexamined_votes = UnexaminedVotes(all, search.max_hypotheses, looked_at);
   if (trace) {
     trace->hypotheses = second_round ? std::move(all) : std::move(first);
     trace->verified = std::move(verified);

@@ -261,7 +261,11 @@ struct LocalizeOptions {
   // (LocalizeStats::unexamined_votes): verification sees only the maps the
   // votes name, and where the votes do not single the answer's map out, a
   // map never looked at may fit as well (a twin room elsewhere on a large
-  // site). Votes are counts, and a lead one vote can undo is none: 2.
+  // site). Its place may still be clear for change masks (PlaceClear):
+  // kept from them too, held-out logs lost 0.499 -> 0.474 of their true
+  // changes in the top mask for no fewer false masks (4.8 -> 4.9 %). Votes
+  // are counts (the default vote_temperature 0), and a lead one vote can
+  // undo is none: 2.
   // Chosen on the simulated 100k-map site (lmd-bench places --maps 100000
   // --queries 1000): sure answers 917 at 97.2 % right without a lead, 898
   // at 98.4 % with 1, 855 at 99.6 % with 2, 818 at 100 % with 3. Its cost
@@ -435,7 +439,7 @@ struct LocalizedHit {
   double inlier_rms_m = 0.0;     // RMS distance of the explained query points (ties: smaller first)
   double closeness = 0.0;        // Overlap::closeness (icp.h): how near the explained query points lie
   double votes = 0.0;            // first-stage votes of its map's most voted hypothesis
-  size_t first_stage_rank = 0;   // rank of its best hypothesis (0 = first)
+  size_t first_stage_rank = 0;   // rank of the hypothesis it was verified from, in the order verification chose (0 = first)
   bool agrees_with_best = false; // a place hit: consistent with the best hit (confidence.h)
   std::optional<Pose2> collection_pose;  // the query's own frame in the collection's frame (anchored maps)
   size_t sequence_agreeing = 0;  // sequence queries: earlier maps that fit this hypothesis

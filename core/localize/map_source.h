@@ -21,7 +21,7 @@ class MapSource {
   virtual ~MapSource() = default;
 
   // PlaceIndex::Search over the collection's maps (with
-  // options.anchored_only, over its anchored maps).
+  // options.anchored_only, over its anchored maps): best first, by votes.
   virtual std::vector<PlaceHypothesis> Search(const PlaceFeatures& query, const PlaceSearchOptions& options,
                                               const std::function<bool(uint64_t)>& excluded,
                                               PlaceSearchStats* stats) const = 0;

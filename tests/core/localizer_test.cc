@@ -372,6 +372,9 @@ TEST(LocalizerTest, ATightPriorSkipsTheFirstStageAndALooseOneRunsIt) {
     EXPECT_GT(b.stats.search.lookups, 0u) << q;
     EXPECT_GT(c.stats.search.lookups, 0u) << q;
     EXPECT_LE(a.stats.maps_matched, kOptions.tight_prior_maps) << q;
+    // A prior's first stage is over the maps near it: its votes say nothing of the site's other maps.
+    EXPECT_FALSE(a.verdict.vote_lead.has_value()) << q;
+    EXPECT_FALSE(b.verdict.vote_lead.has_value()) << q;
     more_matched += a.stats.maps_matched > kOptions.prior_maps;
     right_tight += SitePoseAt(a, truth), right_loose += SitePoseAt(b, truth);
   }
@@ -1233,6 +1236,15 @@ TEST(LocalizerTest, AnAnswerIsNotSureWhereAMapNotLookedAtHasAsManyVotes) {
   LocalizeOptions no_lead = one_map;
   no_lead.sure_vote_lead = 0;
   EXPECT_TRUE(LocalizeIn(twins, query, no_lead).verdict.sure);
+
+  // A map whose grid the fit ranking read was looked at, though not verified.
+  LocalizeOptions ranked_two = one_map;
+  ranked_two.fit_rank_maps = 2;
+  const Localization ranked = LocalizeIn(twins, query, ranked_two);
+  ASSERT_EQ(ranked.hits.size(), 1u);
+  EXPECT_EQ(ranked.stats.unexamined_votes, 0.0);
+  EXPECT_FALSE(ranked.verdict.vote_lead.has_value());
+  EXPECT_TRUE(ranked.verdict.sure);
 
   const Localization looked_at_both = LocalizeIn(twins, query);
   EXPECT_EQ(looked_at_both.hits.size(), 2u);
