@@ -178,6 +178,7 @@ struct QueryRecord {
   double best_score = 0, rival_score = 0, changed_best = 0, changed_rival = 0;
   uint32_t agreeing = 0;
   std::string top_hit;  // the top hit's map id ("" without a hit)
+  std::string vote_lead;  // Localization.vote_lead ("" where absent)
 };
 
 Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, const ServedOptions& options,
@@ -235,6 +236,11 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
       rec.best_score = answer.localization().best_score();
       rec.rival_score = answer.localization().rival_score();
       rec.agreeing = answer.localization().agreeing();
+      if (answer.localization().has_vote_lead()) {
+        char lead[32];
+        std::snprintf(lead, sizeof lead, "%g", answer.localization().vote_lead());
+        rec.vote_lead = lead;
+      }
       if (options.changes) {
         v1::DetectChangesRequest detect;
         detect.set_collection(collection);
@@ -282,7 +288,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
     char line[512];
     std::snprintf(line, sizeof line,
                   "%s,%s,%d,%d,%.4f,%.4f,%d,%d,%d,%.4f,%.4f,%.4f,%s,%u,%.3f,%.3f,%d,%zu,%zu,%zu,%.4f,%.4f,%.3f,%s,"
-                  "%.4f,%.4f,%.3f,%.4f,%.3f\n",
+                  "%.4f,%.4f,%.3f,%.4f,%.3f,%s\n",
                   d.name.c_str(), d.maps[d.queries[qs[k]].map].id.c_str(), r.still.place_counted,
                   r.still.first_place_hit, r.still.pose_err_m, r.still.pose_err_deg, r.still.localized,
                   r.still.localized_right, r.still.wrong_pose_fits_better, r.still.confidence, r.best_score,
@@ -290,7 +296,7 @@ Result<ServedLog> RunLog(const client::LmdClient& client, const Dataset& d, cons
                   r.changed.localized, r.changed.first_change_mask, r.changed.masks, r.changed.false_masks,
                   r.changed_best, r.changed_rival, r.changed.cpu_ms, r.top_hit.c_str(),
                   r.still.site_known ? r.still.site_err_m : -1.0, r.still.site_known ? r.still.site_err_deg : -1.0,
-                  r.still.pose_d2, r.still.position_sd_m, r.still.heading_sd_deg);
+                  r.still.pose_d2, r.still.position_sd_m, r.still.heading_sd_deg, r.vote_lead.c_str());
     log.query_lines += line;
   }
   log.still = SummarizeAnswers(still);

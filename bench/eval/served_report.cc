@@ -17,7 +17,7 @@ constexpr char kCsvHeader[] =
     "log,query,place_counted,first_place_hit,pose_err_m,pose_err_deg,localized,localized_right,"
     "wrong_pose_fits_better,confidence,best_score,rival_score,rival,agreeing,cpu_ms,wall_ms,changed_localized,"
     "first_change_mask,masks,false_masks,changed_best_score,changed_rival_score,changed_cpu_ms,top_hit,site_err_m,"
-    "site_err_deg,pose_d2,position_sd_m,heading_sd_deg\n";
+    "site_err_deg,pose_d2,position_sd_m,heading_sd_deg,vote_lead\n";
 
 struct Group {
   std::string label;
