@@ -345,7 +345,7 @@ double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& gues
 }
 
 void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
-               double block_m, std::vector<PlaceHypothesis>* hypotheses) {
+               double block_m, std::vector<PlaceHypothesis>* hypotheses, std::unordered_set<uint64_t>* read) {
   std::unordered_map<uint64_t, std::shared_ptr<const PreparedMap>> maps;  // each read once
   std::vector<std::pair<double, PlaceHypothesis>> ranked;
   for (const PlaceHypothesis& h : *hypotheses) {
@@ -361,6 +361,9 @@ void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeO
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   for (size_t i = 0; i < ranked.size(); ++i) (*hypotheses)[i] = std::move(ranked[i].second);
+  if (read) {
+    for (const auto& [id, grid] : maps) read->insert(id);
+  }
 }
 
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
@@ -499,18 +502,6 @@ void SetMapVotes(const std::vector<PlaceHypothesis>& all, std::vector<LocalizedH
   }
 }
 
-// The maps RankByFit reads of the first `read` hypotheses (in vote order):
-// the first `maps` distinct ones.
-void AddFirstMaps(const std::vector<PlaceHypothesis>& hypotheses, size_t read, size_t maps,
-                  std::unordered_set<uint64_t>* ids) {
-  std::unordered_set<uint64_t> first;
-  for (size_t i = 0; i < read && i < hypotheses.size(); ++i) {
-    if (first.size() >= maps && !first.count(hypotheses[i].map_id)) break;
-    first.insert(hypotheses[i].map_id);
-  }
-  ids->insert(first.begin(), first.end());
-}
-
 // The most votes of a map in `all` not `looked_at`. A search that returned
 // its `max_hypotheses` may have cut maps with as many votes as its last.
 double UnexaminedVotes(const std::vector<PlaceHypothesis>& all, size_t max_hypotheses,
@@ -535,8 +526,9 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   const auto first_end = all.begin() + static_cast<std::ptrdiff_t>(std::min(all.size(), options.search.max_hypotheses));
   std::vector<PlaceHypothesis> first(all.begin(), first_end);
   stats->hypotheses = first.size();
+  std::unordered_set<uint64_t> looked_at;  // fit ranked or verified
   if (options.fit_rank_maps > 0) {
-    RankByFit(query, source, options, options.fit_rank_maps, options.fit_rank_block_m, &first);
+    RankByFit(query, source, options, options.fit_rank_maps, options.fit_rank_block_m, &first, &looked_at);
   }
   stats->search_ms += MsSince(t);
   std::vector<Candidate> verified;
@@ -550,12 +542,10 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
     }
     SortHits(&hits, options);
   }
-  // The maps looked at: verified, or fit ranked (RankByFit: the first
-  // fit_rank_maps of the first round, every map in the second).
-  std::unordered_set<uint64_t> looked_at;
   for (const Candidate& c : verified) looked_at.insert(c.map_id);
-  AddFirstMaps(all, second_round ? all.size() : first.size(), second_round ? all.size() : options.fit_rank_maps,
-               &looked_at);
+  if (second_round) {
+    for (const PlaceHypothesis& h : all) looked_at.insert(h.map_id);  // the second round fit ranks them all
+  }
   SetMapVotes(all, &hits);
   stats->unexamined_votes = UnexaminedVotes(all, search.max_hypotheses, looked_at);
   if (trace) {

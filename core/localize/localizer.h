@@ -262,10 +262,10 @@ struct LocalizeOptions {
   // votes name, and where the votes do not single the answer's map out, a
   // map never looked at may fit as well (a twin room elsewhere on a large
   // site). Its place may still be clear for change masks (PlaceClear):
-  // kept from them too, held-out logs lost 0.499 -> 0.474 of their true
-  // changes in the top mask for no fewer false masks (4.8 -> 4.9 %). Votes
-  // are counts (the default vote_temperature 0), and a lead one vote can
-  // undo is none: 2.
+  // keeping such answers from masks too cost the held-out logs 0.499 ->
+  // 0.474 of their true changes in the top mask for no fewer false masks
+  // (4.8 -> 4.9 %). Votes are counts (the default vote_temperature 0), and
+  // a lead one vote can undo is none: 2.
   // Chosen on the simulated 100k-map site (lmd-bench places --maps 100000
   // --queries 1000): sure answers 917 at 97.2 % right without a lead, 898
   // at 98.4 % with 1, 855 at 99.6 % with 2, 818 at 100 % with 3. Its cost

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <unordered_set>
 #include <vector>
 
 #include "core/localize/localizer.h"
@@ -67,8 +68,9 @@ double FitNear(const LocalQuery& query, const PreparedMap& db, const Pose2& gues
 // The hypotheses of the first max_maps maps, in order of the query's fit
 // near each (FitNear within options.match.window_m, from blocks of
 // block_m; LocalizeOptions::fit_rank_maps), then the others as they were.
+// `read` (optional) gains the ids of the maps whose grids it read.
 void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeOptions& options, size_t max_maps,
-               double block_m, std::vector<PlaceHypothesis>* hypotheses);
+               double block_m, std::vector<PlaceHypothesis>* hypotheses, std::unordered_set<uint64_t>* read = nullptr);
 
 // A map passed over for chosen route neighbours, with its guesses.
 struct PassedOver {
