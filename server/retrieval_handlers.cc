@@ -64,6 +64,7 @@ void ToWire(const Verdict& verdict, const std::vector<std::string>& hit_ids, v1:
   out->set_fell_back_to_global(verdict.fell_back_to_global);
   out->set_sequence_maps(static_cast<uint32_t>(verdict.sequence_maps));
   out->set_sequence_agreeing(static_cast<uint32_t>(verdict.sequence_agreeing));
+  out->set_sequence_by_newest(verdict.sequence_by_newest);
   out->set_slide_margin(verdict.slide_margin);
   if (verdict.vote_lead) out->set_vote_lead(*verdict.vote_lead);
   if (!hit_ids.empty()) *out->mutable_pose_covariance() = ToProto(verdict.pose_covariance);

@@ -122,6 +122,7 @@ void PrintLocalization(const v1::Localization& l, bool json) {
   if (l.sequence_maps() > 0) {
     std::printf("%u of the sequence's %u earlier maps fit the first hit's pose\n", l.sequence_agreeing(),
                 l.sequence_maps());
+    if (l.sequence_by_newest()) std::printf("answered by the newest map alone, sure at the sequence's best place\n");
   }
   if (l.has_collection_pose()) {
     const v1::Pose2& p = l.collection_pose();

@@ -23,6 +23,11 @@ double Disagreement(const PreparedMap& a, const PreparedMap& b, const Pose2& b_i
   return std::max(FreeSpaceShare(b.sparse_points, a, b_in_a), FreeSpaceShare(a.sparse_points, b, Inverse(b_in_a)));
 }
 
+bool OnePlace(const Pose2& a, const Pose2& b, const ConfidenceOptions& options) {
+  return std::hypot(a.x - b.x, a.y - b.y) <= options.same_place_m &&
+         std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= options.same_place_deg * M_PI / 180;
+}
+
 double LogisticFit::Probability(double best_score, double margin, bool sure) const {
   const double z = bias + score_weight * best_score + margin_weight * margin + (sure ? sure_weight : 0.0);
   return 1.0 / (1.0 + std::exp(-z));
@@ -64,10 +69,7 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
     h.agrees_with_best = false;
     if (h.map == nullptr || h.score < best.score - options.agreement_window) continue;
     if (best.collection_pose && h.collection_pose) {
-      const Pose2& a = *best.collection_pose;
-      const Pose2& b = *h.collection_pose;
-      h.agrees_with_best = std::hypot(a.x - b.x, a.y - b.y) <= options.same_place_m &&
-                           std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= options.same_place_deg * M_PI / 180;
+      h.agrees_with_best = OnePlace(*best.collection_pose, *h.collection_pose, options);
     } else {
       // The query's pose in A and in B give B's frame in A's: A <- query <- B.
       const Pose2 b_in_a = Compose(best.pose, Inverse(h.pose));

@@ -161,6 +161,9 @@ struct Verdict {
   bool fell_back_to_global = false;  // ... so a global query answered (lmdd, on request)
   size_t sequence_maps = 0;      // a sequence query: its earlier maps
   size_t sequence_agreeing = 0;  // ... of which fit the best hit's pose
+  // ... answered by its newest map judged alone, sure where the sequence was
+  // not (LocalizeOptions::sequence_newest_alone)
+  bool sequence_by_newest = false;
   // The query's own frame in the collection's frame: the best hit's
   // collection_pose or, where its map is not anchored (stored by a robot
   // that did not know where it was), that of the best returned hit that
@@ -188,6 +191,10 @@ struct JudgedHit {
   // same_place_m and same_place_deg), whatever their maps look like.
   std::optional<Pose2> collection_pose;
 };
+
+// Whether two poses of the query in the collection's frame name one place
+// (within same_place_m and same_place_deg).
+bool OnePlace(const Pose2& a, const Pose2& b, const ConfidenceOptions& options);
 
 // Judges `hits` (best first); sets each hit's agrees_with_best (the best
 // agrees with itself). `self_rival`: the score of the best hit's map at

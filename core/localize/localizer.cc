@@ -272,6 +272,12 @@ double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const L
   return second.score > 0 ? Scored(query, *best.db, second, options).score : 0.0;
 }
 
+std::function<double(const LocalizedHit& best)> OtherPoseRival(const LocalQuery& query, const LocalizeOptions& options,
+                                                               const ConfidenceOptions& verdict) {
+  if (options.self_rival_radius_m <= 0) return {};
+  return [&query, &options, &verdict](const LocalizedHit& best) { return OtherPoseScore(query, best, options, verdict); };
+}
+
 double SlideMargin(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
                    const ConfidenceOptions& verdict) {
   const std::vector<Point2>& points = query.match.points;
@@ -594,12 +600,8 @@ Localization Localize(const LocalQuery& query, const MapSource& source, const Lo
   Localization out;
   std::vector<LocalizedHit> hits = SearchAndVerify(query, source, options, excluded, &out.stats);
   SetCollectionPoses(source, &hits);
-  std::function<double(const LocalizedHit&)> second_pose;  // anywhere in the best map
-  if (options.self_rival_radius_m > 0) {
-    second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(query, best, options, options.confidence); };
-  }
-  Conclude(query, options, std::move(hits), second_pose, with_changes, &out, /*prior_place=*/false,
-           SiteMaps{&source, &excluded});
+  Conclude(query, options, std::move(hits), OtherPoseRival(query, options, options.confidence), with_changes, &out,
+           /*prior_place=*/false, SiteMaps{&source, &excluded});
   return out;
 }
 

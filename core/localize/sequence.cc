@@ -29,6 +29,27 @@ bool Near(const Pose2& a, const Pose2& b, double metres, double radians) {
   return std::hypot(a.x - b.x, a.y - b.y) <= metres && std::abs(std::remainder(a.theta - b.theta, 2 * M_PI)) <= radians;
 }
 
+// The newest map's own hits and its fit at each hypothesis (of two fits of
+// one map within a match window of each other, the better), best first:
+// every pose at which the sequence's search saw the newest map fit.
+std::vector<LocalizedHit> NewestFits(std::vector<LocalizedHit> hits, const std::vector<Hypothesis>& hypotheses,
+                                     const LocalizeOptions& options) {
+  const double window_rad = options.match.window_deg * M_PI / 180;
+  for (const Hypothesis& h : hypotheses) {
+    if (!h.hit.db) continue;
+    auto same = std::find_if(hits.begin(), hits.end(), [&](const LocalizedHit& o) {
+      return o.map_id == h.hit.map_id && Near(o.pose, h.hit.pose, options.match.window_m, window_rad);
+    });
+    if (same == hits.end()) {
+      hits.push_back(h.hit);
+    } else if (h.hit.score > same->score) {
+      *same = h.hit;
+    }
+  }
+  SortHits(&hits, options);
+  return hits;
+}
+
 }  // namespace
 
 SequenceCheck CheckSequenceAt(const LocalQuery& newest, const std::vector<SequenceStep>& earlier,
@@ -92,6 +113,7 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   site.second_round_hypotheses = 0;
   std::vector<LocalizedHit> newest_hits = SearchAndVerify(newest, source, site, excluded, &out.stats);
   SetCollectionPoses(source, &newest_hits);
+  const double newest_unexamined_votes = out.stats.unexamined_votes;
   const bool anchored = std::any_of(newest_hits.begin(), newest_hits.end(),
                                     [](const LocalizedHit& h) { return h.collection_pose.has_value(); });
   // What each map of the sequence showed already: its verified hits, with
@@ -194,15 +216,38 @@ Localization LocalizeSequence(const LocalQuery& newest, const std::vector<Sequen
   // The newest map's best fit elsewhere in the best hit's map is a rival: in
   // a corridor every map of the sequence may fit as well shifted along it
   // (the odometry moves them together), and only that shift tells.
-  std::function<double(const LocalizedHit&)> second_pose;
-  if (options.self_rival_radius_m > 0) {
-    second_pose = [&](const LocalizedHit& best) { return OtherPoseScore(newest, best, options, judged.confidence); };
-  }
-  Conclude(newest, judged, std::move(hits), second_pose, with_changes, &out, /*prior_place=*/false,
-           SiteMaps{&source, &excluded});
+  Conclude(newest, judged, std::move(hits), OtherPoseRival(newest, options, judged.confidence), with_changes, &out,
+           /*prior_place=*/false, SiteMaps{&source, &excluded});
   out.verdict.sequence_maps = earlier.size();
   if (!out.hits.empty()) out.verdict.sequence_agreeing = out.hits[0].sequence_agreeing;
-  return out;
+  if (!options.sequence_newest_alone || out.verdict.sure || out.verdict.sequence_agreeing == 0 ||
+      StopAsked(options)) {
+    return out;
+  }
+  // Not sure by the sequence, though an earlier map fits where its odometry
+  // puts it: the newest map judged alone, as a global answer is (its
+  // search's vote lead included), with every pose at which the sequence saw
+  // it fit as a possible rival. Where that is sure at the place of the
+  // sequence's best hypothesis, the answer is the newest map's: the mean fit
+  // of the maps (sequence_min_score) falls short where another earlier map
+  // shows a place no stored map shows.
+  Localization alone;
+  alone.stats = out.stats;
+  alone.stats.unexamined_votes = newest_unexamined_votes;
+  Conclude(newest, options, NewestFits(std::move(newest_hits), hypotheses, options),
+           OtherPoseRival(newest, options, options.confidence), with_changes, &alone, /*prior_place=*/false,
+           SiteMaps{&source, &excluded});
+  const LocalizedHit& sequence_best = out.hits[0];
+  if (!alone.verdict.sure || !alone.hits[0].collection_pose || !sequence_best.collection_pose ||
+      !OnePlace(*alone.hits[0].collection_pose, *sequence_best.collection_pose, options.confidence)) {
+    out.stats = alone.stats;  // the work done, whichever answer is given
+    out.stats.unexamined_votes = 0;
+    return out;
+  }
+  alone.verdict.sequence_maps = out.verdict.sequence_maps;
+  alone.verdict.sequence_agreeing = out.verdict.sequence_agreeing;
+  alone.verdict.sequence_by_newest = true;
+  return alone;
 }
 
 }  // namespace lmd

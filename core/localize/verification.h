@@ -43,6 +43,11 @@ LocalizedHit ScoredAt(const LocalQuery& query, const PreparedMap& db, const Pose
 double OtherPoseScore(const LocalQuery& query, const LocalizedHit& best, const LocalizeOptions& options,
                       const ConfidenceOptions& verdict);
 
+// OtherPoseScore as Conclude's second_pose; empty where
+// options.self_rival_radius_m is 0. Holds references to its arguments.
+std::function<double(const LocalizedHit& best)> OtherPoseRival(const LocalQuery& query, const LocalizeOptions& options,
+                                                               const ConfidenceOptions& verdict);
+
 // How firmly `best`'s map pins the query's pose at the precision a sure
 // answer promises (verdict.max_pose_spread_m): the share of the query's
 // points within a third of inlier_radius_m of the map's at the pose, less

@@ -291,6 +291,54 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   EXPECT_GE(compared, 10u);
 }
 
+// A robot that drove through a room no stored map shows sends an earlier
+// map that fits nowhere, and the mean fit of its maps (sequence_min_score)
+// falls short. Where another earlier map fits where its odometry puts it,
+// the answer is as sure as the newest map's alone, at that map's place
+// (sequence_newest_alone); where none does, the sequence confirms nothing
+// and stays unsure.
+TEST(LocalizerTest, ASequenceConfirmedByAnEarlierMapIsAsSureAsItsNewestMapAlone) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  LocalizeOptions sequence_only = kOptions;
+  sequence_only.sequence_newest_alone = false;
+  // A yard of scattered clutter (the demo world has walls only), driven
+  // through before.
+  LocalMap yard;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-6.0, 6.0);
+  for (int i = 0; i < 600; ++i) yard.points.push_back({coordinate(rng), coordinate(rng)});
+  const SequenceStep unmapped{PrepareLocalQuery(yard, kOptions), {-6.0, 0.5, Deg(10)}, 6.0};
+  size_t sure_alone = 0, sure_confirmed = 0;
+  for (size_t q = 13; q < DemoMaps().size(); q += 12) {
+    const LocalMap newest_map = MovedDemoMap(q);
+    const LocalQuery newest = PrepareLocalQuery(newest_map, kOptions);
+    const LocalMap& before = DemoMaps()[q - 4];
+    const SequenceStep mapped{PrepareLocalQuery(before, kOptions),
+                              Compose(Inverse(newest_map.truth.global_frame), before.truth.global_frame), 4.0};
+    const Localization alone = Localize(newest, collection, kOptions);
+    const Localization confirmed = LocalizeSequence(newest, {mapped, unmapped}, collection, kOptions);
+    const Localization without = LocalizeSequence(newest, {mapped, unmapped}, collection, sequence_only);
+    const Localization unconfirmed = LocalizeSequence(newest, {unmapped, unmapped}, collection, kOptions);
+    EXPECT_FALSE(without.verdict.sure) << q << ": mean fit " << without.verdict.best_score;
+    EXPECT_FALSE(without.verdict.sequence_by_newest) << q;
+    EXPECT_FALSE(unconfirmed.verdict.sure) << q;
+    EXPECT_EQ(confirmed.verdict.sequence_maps, 2u) << q;
+    EXPECT_EQ(confirmed.verdict.sequence_by_newest, confirmed.verdict.sure) << q;
+    if (!alone.verdict.sure) continue;
+    ++sure_alone;
+    if (!confirmed.verdict.sure) continue;
+    ++sure_confirmed;
+    EXPECT_EQ(confirmed.verdict.sequence_agreeing, 1u) << q;
+    ASSERT_TRUE(confirmed.hits[0].collection_pose && alone.hits[0].collection_pose) << q;
+    EXPECT_TRUE(OnePlace(*confirmed.hits[0].collection_pose, *alone.hits[0].collection_pose, kOptions.confidence)) << q;
+    ASSERT_TRUE(confirmed.verdict.collection_pose) << q;
+    EXPECT_LT(TranslationError(*confirmed.verdict.collection_pose, newest_map.truth.global_frame), 0.2) << q;
+  }
+  EXPECT_GE(sure_alone, 10u);
+  EXPECT_GE(sure_confirmed, sure_alone * 9 / 10);
+}
+
 // A sequence hypothesis is checked where it puts each map: the newest at
 // the pose, each earlier map where the odometry carries it, in a window
 // grown by the drift over its travel; the newest map through

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -204,6 +205,38 @@ TEST_F(AnchoredQueryTest, ASequenceQuerySaysHowManyOfItsMapsAgree) {
   EXPECT_LT(Distance(response.hits(0).collection_pose(), DemoMaps()[newest].truth.global_frame), 0.1);
   EXPECT_EQ(response.localization().sequence_agreeing(), response.hits(0).sequence_agreeing());
   EXPECT_GE(response.hits(0).sequence_agreeing(), 1u);
+}
+
+// A robot that drove through a yard no stored map shows sends a map that
+// fits nowhere; the mean fit of its sequence then falls short. Where its
+// other earlier map fits, the newest map judged alone answers, sure at the
+// sequence's best place, and the response says so (with the vote lead of a
+// global answer, where its search left maps unexamined).
+TEST_F(AnchoredQueryTest, ASequenceLeftShortByAnUnmappedPlaceIsAnsweredByItsNewestMap) {
+  LocalMap yard;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-6.0, 6.0);
+  for (int i = 0; i < 600; ++i) yard.points.push_back({coordinate(rng), coordinate(rng)});
+  size_t by_newest = 0;
+  for (size_t newest : {31, 61, 91, 121}) {
+    v1::RetrieveRequest request = SequenceQuery(newest);
+    *request.mutable_sequence(1)->mutable_map() = ToProto(yard);
+    v1::RetrieveResponse response;
+    ASSERT_TRUE(server_->client().Retrieve(request, &response).ok()) << newest;
+    const v1::Localization& verdict = response.localization();
+    if (!verdict.sequence_by_newest()) {
+      EXPECT_FALSE(verdict.has_vote_lead()) << newest;  // an anchored sequence's own answer
+      continue;
+    }
+    ++by_newest;
+    EXPECT_TRUE(verdict.localized()) << newest;
+    EXPECT_EQ(verdict.sequence_maps(), 2u) << newest;
+    EXPECT_GE(verdict.sequence_agreeing(), 1u) << newest;
+    if (verdict.has_vote_lead()) EXPECT_GE(verdict.vote_lead(), 2.0) << newest;
+    ASSERT_TRUE(verdict.has_collection_pose()) << newest;
+    EXPECT_LT(Distance(verdict.collection_pose(), DemoMaps()[newest].truth.global_frame), 0.2) << newest;
+  }
+  EXPECT_GE(by_newest, 2u);
 }
 
 // Lost robots store maps without anchors; where they crowd a place, a
