@@ -289,6 +289,36 @@ TEST(JudgeTest, AgreeingAnchoredMapsThatPutTheQueryElsewhereMakeItNotSure) {
   EXPECT_TRUE(Judge(&unchecked, off).sure);
 }
 
+// Identical rooms of one building put no wall in each other's free space:
+// maps of both agree with a best hit that has no anchor. Where the anchored
+// ones among them name places apart in the site, the place is not known.
+TEST(JudgeTest, AgreeingMapsAnchoredAtTwoPlacesMakeItNotSure) {
+  const Maps& m = TheMaps();
+  const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
+  const Pose2 here{10.0, 5.0, 0.3}, nearby{10.4, 5.2, 0.32}, twin{40.0, 5.0, 0.3 + M_PI / 2};
+  auto judged = [&](const Pose2& first, const Pose2& second) {
+    std::vector<JudgedHit> hits = {{0.95, kQueryPose, &m.room, false, std::nullopt},
+                                   {0.93, in_copy, &m.copy, false, first},
+                                   {0.9, kQueryPose, &m.room, false, second}};
+    const Verdict v = Judge(&hits);
+    EXPECT_TRUE(hits[1].agrees_with_best && hits[2].agrees_with_best);
+    return v;
+  };
+  const Verdict one_place = judged(here, nearby);
+  EXPECT_TRUE(one_place.sure);
+  EXPECT_EQ(one_place.agreeing, 2u);
+  const Verdict two_places = judged(here, twin);
+  EXPECT_FALSE(two_places.sure);
+  EXPECT_EQ(two_places.agreeing, 2u);
+  EXPECT_DOUBLE_EQ(two_places.rival_score, 0.0);
+  // With the best anchored, a map anchored elsewhere disagrees: a rival.
+  std::vector<JudgedHit> anchored_best = {{0.95, kQueryPose, &m.room, false, here},
+                                          {0.9, kQueryPose, &m.room, false, twin}};
+  const Verdict rival = Judge(&anchored_best);
+  EXPECT_FALSE(rival.sure);
+  EXPECT_DOUBLE_EQ(rival.rival_score, 0.9);
+}
+
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict close = Judge(&hits, ThresholdsOnly(), 0.75);
