@@ -372,6 +372,36 @@ void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeO
   }
 }
 
+namespace {
+
+// Where maps without anchors are among the candidates: the best-voted
+// anchored maps neither chosen nor passed over (`seen`), with all their
+// hypotheses as guesses, until options.verify_anchored_maps of the
+// candidates are anchored.
+void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source,
+                           const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
+                           const std::unordered_map<uint64_t, size_t>& seen, std::vector<Candidate>* candidates) {
+  if (options.verify_anchored_maps == 0 || !source.HasAnchors()) return;
+  size_t anchored = 0;
+  for (const Candidate& c : *candidates) anchored += source.AnchorOf(c.map_id).has_value();
+  if (anchored == candidates->size()) return;  // no map without an anchor crowded the choice
+  std::unordered_map<uint64_t, size_t> added;  // map id -> candidate index
+  for (size_t r = 0; r < hypotheses.size(); ++r) {
+    const PlaceHypothesis& h = hypotheses[r];
+    const Pose2 guess = HypothesisPose(h, query.map->heading);
+    if (auto it = added.find(h.map_id); it != added.end()) {
+      (*candidates)[it->second].guesses.push_back(guess);
+      continue;
+    }
+    if (anchored >= options.verify_anchored_maps || seen.count(h.map_id) > 0 || !source.AnchorOf(h.map_id)) continue;
+    added.emplace(h.map_id, candidates->size());
+    candidates->push_back({h.map_id, {guess}, h.votes, r});
+    ++anchored;
+  }
+}
+
+}  // namespace
+
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
                                         std::vector<PassedOver>* passed) {
@@ -430,6 +460,7 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
       (*passed)[passed_at.at(h.map_id)].candidate.guesses.push_back(guess);
     }
   }
+  AddAnchoredCandidates(query, source, hypotheses, options, at, &candidates);
   return candidates;
 }
 

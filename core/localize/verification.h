@@ -86,6 +86,8 @@ struct PassedOver {
 // The maps to verify (at most options.verify_maps), in order of their best
 // hypothesis, each with all its hypotheses as guesses; route neighbours of
 // chosen maps passed over (into `passed`, when given, in the same order).
+// Where maps without anchors are among them, anchored maps follow until
+// options.verify_anchored_maps are anchored.
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
                                         std::vector<PassedOver>* passed = nullptr);

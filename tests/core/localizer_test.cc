@@ -291,6 +291,40 @@ TEST(LocalizerTest, ASequenceAnswerKeepsTheNewestMapsOwnFitAtItsPlace) {
   EXPECT_GE(compared, 10u);
 }
 
+// Robots that store maps without anchors crowd the maps a global query
+// verifies; anchored maps, which alone tell identical rooms apart, are
+// verified besides them until verify_anchored_maps of the verified are.
+TEST(LocalizerTest, AnchoredMapsAreVerifiedWhereMapsWithoutAnchorsCrowdTheChoice) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  for (size_t i : EveryThirdMap()) {  // a lost robot's copies of every place, stored without anchors
+    for (uint64_t copy = 1; copy <= 3; ++copy) {
+      ASSERT_TRUE(collection.Add(100000 * copy + i, DemoPlace(i), MapSource::Route{1 + copy, i + 1}).ok());
+    }
+  }
+  LocalizeOptions few = kOptions;
+  few.verify_maps = 3;  // the copies alone fill it
+  LocalizeOptions none = few;
+  none.verify_anchored_maps = 0;
+  size_t crowded = 0;
+  for (size_t q = 13; q < DemoMaps().size(); q += 24) {
+    const LocalQuery query = PrepareLocalQuery(MovedDemoMap(q), kOptions);
+    auto anchored_verified = [&](const LocalizeOptions& options) {
+      LocalizeStats stats;
+      localize_internal::SearchTrace trace;
+      localize_internal::SearchAndVerify(query, collection, options, {}, &stats, &trace);
+      size_t anchored = 0;
+      for (const localize_internal::Candidate& c : trace.verified) anchored += collection.AnchorOf(c.map_id).has_value();
+      return anchored;
+    };
+    const size_t without = anchored_verified(none), with = anchored_verified(few);
+    if (without >= few.verify_anchored_maps) continue;
+    ++crowded;
+    EXPECT_GE(with, few.verify_anchored_maps) << q << ": " << without << " anchored without";
+  }
+  EXPECT_GE(crowded, 3u);
+}
+
 // A robot that drove through a room no stored map shows sends an earlier
 // map that fits nowhere, and the mean fit of its maps (sequence_min_score)
 // falls short. Where another earlier map fits where its odometry puts it,
