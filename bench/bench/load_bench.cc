@@ -501,7 +501,10 @@ int RunLoadBench(int argc, char** argv) {
       const bool shows_place = PlaceOverlap(robot_maps[r][t], *hit) >= 0.5;
       localised += shows_place;
       sure += rows[r][t].localized;
-      if (rows[r][t].localized && !shows_place) ++sure_elsewhere, sure_elsewhere_seeded += seeded.Shows(robot_maps[r][t]);
+      if (rows[r][t].localized && !shows_place) {
+        ++sure_elsewhere;
+        sure_elsewhere_seeded += seeded.Shows(robot_maps[r][t]);
+      }
     }
   }
   const double place_at_1 = answered > 0 ? static_cast<double>(localised) / static_cast<double>(answered) : 0.0;

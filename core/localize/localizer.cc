@@ -388,14 +388,13 @@ void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source,
   std::unordered_map<uint64_t, size_t> added;  // map id -> candidate index
   for (size_t r = 0; r < hypotheses.size(); ++r) {
     const PlaceHypothesis& h = hypotheses[r];
-    const Pose2 guess = HypothesisPose(h, query.map->heading);
     if (auto it = added.find(h.map_id); it != added.end()) {
-      (*candidates)[it->second].guesses.push_back(guess);
+      (*candidates)[it->second].guesses.push_back(HypothesisPose(h, query.map->heading));
       continue;
     }
     if (anchored >= options.verify_anchored_maps || seen.count(h.map_id) > 0 || !source.AnchorOf(h.map_id)) continue;
     added.emplace(h.map_id, candidates->size());
-    candidates->push_back({h.map_id, {guess}, h.votes, r});
+    candidates->push_back({h.map_id, {HypothesisPose(h, query.map->heading)}, h.votes, r});
     ++anchored;
   }
 }

@@ -51,7 +51,7 @@ struct LocalizeOptions {
   // choice, and only anchored maps tell identical rooms apart (Judge's
   // one-place rule). lmd-bench load, robots asking globally in the
   // simulated building, 150 robots: sure answers with the top hit in a twin
-  // room 68 of 3,501 -> 22 of 3,315, lmdd CPU per robot-second the same
+  // room 68 of 3,501 -> 26 of 3,347, lmdd CPU per robot-second the same
   // (docs/results.md, 27th stop). 0: off.
   size_t verify_anchored_maps = 4;
   // A place is verified through few of its maps: a map whose route
