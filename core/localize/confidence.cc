@@ -57,6 +57,30 @@ double HighestHarmlessRival(double best_score, const ConfidenceOptions& options)
   return best_score - margin;
 }
 
+int SiteNamingHit(const std::vector<JudgedHit>& hits) {
+  for (size_t i = 0; i < hits.size(); ++i) {
+    if (hits[i].agrees_with_best && hits[i].collection_pose) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool SitePlaceClear(const std::vector<JudgedHit>& hits, int named, double named_other_pose,
+                    const ConfidenceOptions& options) {
+  if (named < 0) return false;
+  const Pose2& place = *hits[static_cast<size_t>(named)].collection_pose;
+  double elsewhere = named_other_pose;
+  for (const JudgedHit& h : hits) {
+    if (h.collection_pose && !OnePlace(place, *h.collection_pose, options)) elsewhere = std::max(elsewhere, h.score);
+  }
+  return ClearLead(hits[static_cast<size_t>(named)].score, elsewhere, options);
+}
+
+bool ClearLead(double best_score, double rival_score, const ConfidenceOptions& options) {
+  const double margin = best_score - rival_score;
+  return best_score >= options.min_score && margin >= options.min_margin &&
+         options.global_fit.Probability(best_score, margin, false) >= options.min_global_probability;
+}
+
 Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, double self_rival) {
   Verdict v;
   v.rival_score = self_rival;
@@ -112,9 +136,7 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
       places_apart = true;
     }
   }
-  const double margin = v.best_score - v.rival_score;
-  v.sure = !places_apart && v.best_score >= options.min_score && margin >= options.min_margin &&
-           options.global_fit.Probability(v.best_score, margin, false) >= options.min_global_probability;
+  v.sure = !places_apart && ClearLead(v.best_score, v.rival_score, options);
   if (options.max_pose_spread_m > 0 &&
       (v.pose_spread_m > options.max_pose_spread_m || v.pose_spread_deg > options.max_pose_spread_deg)) {
     v.sure = false;

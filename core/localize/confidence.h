@@ -196,6 +196,24 @@ struct JudgedHit {
 // (within same_place_m and same_place_deg).
 bool OnePlace(const Pose2& a, const Pose2& b, const ConfidenceOptions& options);
 
+// Whether a best hit scoring `best_score` leads `rival_score` as a sure
+// answer must: at least min_score, by min_margin, and past the global line
+// (global_fit at min_global_probability).
+bool ClearLead(double best_score, double rival_score, const ConfidenceOptions& options);
+
+// The first of judged `hits` (best first) that is anchored and agrees with
+// the best: the hit that names the answer's place in the site (none: -1).
+int SiteNamingHit(const std::vector<JudgedHit>& hits);
+
+// Whether the anchored hits name the answer's place in the site: the naming
+// hit `named` leads every anchored hit elsewhere (not OnePlace with it) and
+// its own map's best other pose (`named_other_pose`, 0: none) as a sure
+// answer's best must (ClearLead). Maps without anchors cannot name it:
+// identical rooms agree by what they saw, so where the best map has no
+// anchor the site's place rests on the anchored maps' own fits.
+bool SitePlaceClear(const std::vector<JudgedHit>& hits, int named, double named_other_pose,
+                    const ConfidenceOptions& options);
+
 // Judges `hits` (best first); sets each hit's agrees_with_best (the best
 // agrees with itself). `self_rival`: the score of the best hit's map at
 // another pose (a rival whatever the maps say; 0: none).

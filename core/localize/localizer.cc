@@ -208,6 +208,15 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->verdict.slide_margin = SlideMargin(query, hits[0], options, options.confidence);
     out->verdict.sure = out->verdict.slide_margin >= options.confidence.min_slide_margin;
   }
+  // Nor, in a collection with anchored maps, one whose place in the site
+  // its anchored hits do not name (sure_needs_site). Where the naming hit is
+  // not the best, its own map's other poses are look-alikes too (a map may
+  // show two identical rooms); the best's were searched above.
+  if (out->verdict.sure && options.sure_needs_site && site_maps.source != nullptr && site_maps.source->HasAnchors()) {
+    const int named = SiteNamingHit(judged);
+    const double other = named > 0 && second_pose ? second_pose(hits[static_cast<size_t>(named)]) : 0.0;
+    out->verdict.sure = SitePlaceClear(judged, named, other, options.confidence);
+  }
   SetConfidence(&out->verdict, !hits.empty(), options.confidence);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
   out->stats.verdict_ms += MsSince(t);
@@ -228,12 +237,22 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->stats.changes_ms += MsSince(t);
   }
   const std::optional<Pose2> site = options.fuse_site_pose ? FusedSitePose(hits, options.confidence) : std::nullopt;
-  if (hits.size() > options.top_k) hits.resize(options.top_k);
-  for (size_t i = 0; i < hits.size(); ++i) {
-    if (hits[i].collection_pose && hits[i].agrees_with_best) {  // the best agrees with itself
-      out->verdict.collection_pose = site ? site : hits[i].collection_pose;
-      out->verdict.collection_pose_hit = i;
-      break;
+  const auto named = std::find_if(hits.begin(), hits.end(), [](const LocalizedHit& h) {
+    return h.collection_pose && h.agrees_with_best;  // the best agrees with itself
+  });
+  if (named != hits.end()) {
+    out->verdict.collection_pose = site ? site : named->collection_pose;
+    out->verdict.collection_pose_hit = static_cast<size_t>(named - hits.begin());
+  }
+  if (hits.size() > options.top_k) {
+    // The hit that gives the site pose is returned, after the top_k where
+    // it ranks lower: a robot asking for few hits still learns its place.
+    if (named != hits.end() && out->verdict.collection_pose_hit >= options.top_k) {
+      std::swap(hits[options.top_k], *named);
+      out->verdict.collection_pose_hit = options.top_k;
+      hits.resize(options.top_k + 1);
+    } else {
+      hits.resize(options.top_k);
     }
   }
   if (!hits.empty() && hits[0].db) {
@@ -374,27 +393,54 @@ void RankByFit(const LocalQuery& query, const MapSource& source, const LocalizeO
 
 namespace {
 
-// Where maps without anchors are among the candidates: the best-voted
-// anchored maps neither chosen nor passed over (`seen`), with all their
-// hypotheses as guesses, until options.verify_anchored_maps of the
-// candidates are anchored.
-void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source,
-                           const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
-                           const std::unordered_map<uint64_t, size_t>& seen, std::vector<Candidate>* candidates) {
+// Where `guess` puts the query in the site, for a map anchored at `anchor`.
+Point2 SitePoint(const Pose2& anchor, const Pose2& guess) {
+  const Pose2 site = Compose(anchor, guess);
+  return {site.x, site.y};
+}
+
+// Where maps without anchors are among the candidates: anchored maps of
+// `pool` neither chosen nor passed over (`seen`), best-voted first, with all
+// their hypotheses in `pool` as guesses, until options.verify_anchored_maps
+// of the candidates are anchored. A map joins only where one of its
+// hypotheses puts the query at a place in the site (route_same_place_m) no
+// anchored candidate puts it yet: identical rooms are told apart only by
+// anchored maps of each, and a place many maps show would otherwise take
+// every slot.
+void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source, const std::vector<PlaceHypothesis>& pool,
+                           const LocalizeOptions& options, const std::unordered_map<uint64_t, size_t>& seen,
+                           std::vector<Candidate>* candidates) {
   if (options.verify_anchored_maps == 0 || !source.HasAnchors()) return;
   size_t anchored = 0;
-  for (const Candidate& c : *candidates) anchored += source.AnchorOf(c.map_id).has_value();
+  std::vector<Point2> places;  // where the anchored candidates' guesses put the query in the site
+  for (const Candidate& c : *candidates) {
+    const std::optional<Pose2> anchor = source.AnchorOf(c.map_id);
+    if (!anchor) continue;
+    ++anchored;
+    for (const Pose2& g : c.guesses) places.push_back(SitePoint(*anchor, g));
+  }
   if (anchored == candidates->size()) return;  // no map without an anchor crowded the choice
+  auto placed = [&](const Point2& p) {
+    return std::any_of(places.begin(), places.end(), [&](const Point2& q) {
+      return std::hypot(p.x - q.x, p.y - q.y) <= options.route_same_place_m;
+    });
+  };
   std::unordered_map<uint64_t, size_t> added;  // map id -> candidate index
-  for (size_t r = 0; r < hypotheses.size(); ++r) {
-    const PlaceHypothesis& h = hypotheses[r];
+  for (size_t r = 0; r < pool.size(); ++r) {
+    const PlaceHypothesis& h = pool[r];
+    const Pose2 guess = HypothesisPose(h, query.map->heading);
     if (auto it = added.find(h.map_id); it != added.end()) {
-      (*candidates)[it->second].guesses.push_back(HypothesisPose(h, query.map->heading));
+      (*candidates)[it->second].guesses.push_back(guess);
       continue;
     }
-    if (anchored >= options.verify_anchored_maps || seen.count(h.map_id) > 0 || !source.AnchorOf(h.map_id)) continue;
+    if (anchored >= options.verify_anchored_maps || seen.count(h.map_id) > 0) continue;
+    const std::optional<Pose2> anchor = source.AnchorOf(h.map_id);
+    if (!anchor) continue;
+    const Point2 at = SitePoint(*anchor, guess);
+    if (placed(at)) continue;
+    places.push_back(at);
     added.emplace(h.map_id, candidates->size());
-    candidates->push_back({h.map_id, {HypothesisPose(h, query.map->heading)}, h.votes, r});
+    candidates->push_back({h.map_id, {guess}, h.votes, r});
     ++anchored;
   }
 }
@@ -403,7 +449,7 @@ void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source,
 
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
-                                        std::vector<PassedOver>* passed) {
+                                        std::vector<PassedOver>* passed, const std::vector<PlaceHypothesis>* anchored_pool) {
   std::vector<Candidate> candidates;
   struct Chosen {
     MapSource::Route route;
@@ -459,7 +505,7 @@ std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource
       (*passed)[passed_at.at(h.map_id)].candidate.guesses.push_back(guess);
     }
   }
-  AddAnchoredCandidates(query, source, hypotheses, options, at, &candidates);
+  AddAnchoredCandidates(query, source, anchored_pool ? *anchored_pool : hypotheses, options, at, &candidates);
   return candidates;
 }
 
@@ -482,9 +528,10 @@ std::vector<Candidate> PassedOverFailedFits(const std::vector<PassedOver>& passe
 std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
                                           const std::vector<PlaceHypothesis>& hypotheses,
                                           const LocalizeOptions& options, const ScanMatchOptions& match,
-                                          LocalizeStats* stats, std::vector<Candidate>* verified) {
+                                          LocalizeStats* stats, std::vector<Candidate>* verified,
+                                          const std::vector<PlaceHypothesis>* anchored_pool) {
   std::vector<PassedOver> passed;
-  std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed);
+  std::vector<Candidate> candidates = ChooseCandidates(query, source, hypotheses, options, &passed, anchored_pool);
   const size_t matched_before = stats->maps_matched;
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, candidates, options, match, stats);
   const bool stopped = stats->maps_matched - matched_before < candidates.size();  // (or maps deleted meanwhile)
@@ -568,7 +615,8 @@ std::vector<LocalizedHit> SearchAndVerify(const LocalQuery& query, const MapSour
   }
   stats->search_ms += MsSince(t);
   std::vector<Candidate> verified;
-  std::vector<LocalizedHit> hits = ChooseAndVerify(query, source, first, options, options.match, stats, &verified);
+  std::vector<LocalizedHit> hits =
+      ChooseAndVerify(query, source, first, options, options.match, stats, &verified, /*anchored_pool=*/&all);
   const bool fits = !hits.empty() && hits[0].score >= options.confidence.min_score;
   const bool second_round = options.second_round_hypotheses > 0 && !fits && !StopAsked(options);
   if (second_round) {

@@ -86,11 +86,13 @@ struct PassedOver {
 // The maps to verify (at most options.verify_maps), in order of their best
 // hypothesis, each with all its hypotheses as guesses; route neighbours of
 // chosen maps passed over (into `passed`, when given, in the same order).
-// Where maps without anchors are among them, anchored maps follow until
-// options.verify_anchored_maps are anchored.
+// Where maps without anchors are among them, anchored maps of
+// `anchored_pool` (default: `hypotheses`) at places in the site none of them
+// names follow, until options.verify_anchored_maps are anchored.
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
-                                        std::vector<PassedOver>* passed = nullptr);
+                                        std::vector<PassedOver>* passed = nullptr,
+                                        const std::vector<PlaceHypothesis>* anchored_pool = nullptr);
 
 // The first options.passed_over_retries of `passed` whose chosen neighbours
 // all fit worse than confidence.min_score in `hits` (or were not matched):
@@ -118,11 +120,13 @@ std::vector<LocalizedHit> VerifyCandidates(const LocalQuery& query, const MapSou
 
 // ChooseCandidates, then the chosen verified with `match`, then
 // PassedOverFailedFits verified too (none once the stop cut the first round
-// short), best hits first. `verified` (optional) receives the candidates.
+// short), best hits first. `verified` (optional) receives the candidates;
+// `anchored_pool` as for ChooseCandidates.
 std::vector<LocalizedHit> ChooseAndVerify(const LocalQuery& query, const MapSource& source,
                                           const std::vector<PlaceHypothesis>& hypotheses,
                                           const LocalizeOptions& options, const ScanMatchOptions& match,
-                                          LocalizeStats* stats, std::vector<Candidate>* verified = nullptr);
+                                          LocalizeStats* stats, std::vector<Candidate>* verified = nullptr,
+                                          const std::vector<PlaceHypothesis>* anchored_pool = nullptr);
 
 // What SearchAndVerify chose (lmd-eval global-misses reads it).
 struct SearchTrace {

@@ -319,6 +319,41 @@ TEST(JudgeTest, AgreeingMapsAnchoredAtTwoPlacesMakeItNotSure) {
   EXPECT_DOUBLE_EQ(rival.rival_score, 0.9);
 }
 
+// Where the best hit has no anchor, the answer's place in the site rests on
+// the anchored hits: the one that agrees with the best must lead the
+// anchored hits elsewhere, and its own map's other pose, as a sure answer's
+// best must (a twin room's map may agree with the best as well as the
+// place's own, and fit better where it saw more of the room).
+TEST(JudgeTest, TheSitePlaceIsClearWhereItsAnchoredHitLeadsThoseElsewhere) {
+  const Maps& m = TheMaps();
+  const Pose2 in_copy = Compose(Inverse(m.copy_frame), kQueryPose);
+  const Pose2 here{10.0, 5.0, 0.3}, nearby{10.4, 5.2, 0.32}, twin{40.0, 5.0, 0.3 + M_PI / 2};
+  auto judged = [&](double named, const Pose2& other_at, double other) {
+    // The best (no anchor) a little above the named hit, which it compares.
+    std::vector<JudgedHit> hits = {{named + 0.08, kQueryPose, &m.room, false, std::nullopt},
+                                   {named, in_copy, &m.copy, false, here},
+                                   {other, kQueryPose, &m.partitioned, false, other_at}};
+    Judge(&hits, ThresholdsOnly());
+    return hits;
+  };
+  auto clear = [&](double named, const Pose2& other_at, double other, double named_other_pose = 0.0) {
+    const std::vector<JudgedHit> hits = judged(named, other_at, other);
+    EXPECT_EQ(SiteNamingHit(hits), 1);
+    return SitePlaceClear(hits, SiteNamingHit(hits), named_other_pose, ThresholdsOnly());
+  };
+  EXPECT_TRUE(clear(0.9, twin, 0.65));       // leads the twin by 0.25
+  EXPECT_FALSE(clear(0.9, twin, 0.75));      // by 0.15
+  EXPECT_TRUE(clear(0.9, nearby, 0.85));     // the same place
+  EXPECT_FALSE(clear(0.9, twin, 0.5, 0.8));  // its own map fits the query elsewhere too
+  EXPECT_FALSE(clear(0.55, twin, 0.0));      // explains too little of the query to name a place
+  // No anchored hit agrees with the best: nothing names the place.
+  std::vector<JudgedHit> unplaced = {{0.98, kQueryPose, &m.room, false, std::nullopt},
+                                     {0.7, kQueryPose, &m.partitioned, false, twin}};
+  Judge(&unplaced, ThresholdsOnly());
+  EXPECT_EQ(SiteNamingHit(unplaced), -1);
+  EXPECT_FALSE(SitePlaceClear(unplaced, -1, 0.0, ThresholdsOnly()));
+}
+
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {
   std::vector<JudgedHit> hits = {{0.9, kQueryPose, &TheMaps().room, false, std::nullopt}};
   const Verdict close = Judge(&hits, ThresholdsOnly(), 0.75);

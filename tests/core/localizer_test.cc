@@ -325,6 +325,67 @@ TEST(LocalizerTest, AnchoredMapsAreVerifiedWhereMapsWithoutAnchorsCrowdTheChoice
   EXPECT_GE(crowded, 3u);
 }
 
+// In a site (a collection with anchored maps) an answer is sure only where
+// an anchored map that agrees with the best names its place: maps stored
+// without anchors may show identical rooms at two places, and only anchors
+// tell them apart. A collection without anchors has no site to place an
+// answer in: its answers are sure as before.
+TEST(LocalizerTest, InASiteAnAnswerNoAnchoredMapPlacesIsNotSure) {
+  MemoryCollection site, plain;
+  const size_t half = DemoMaps().size() / 2;
+  for (size_t i : EveryThirdMap()) {
+    if (i < half) {
+      StoreAnchored({i}, &site);
+    } else {
+      Store({i}, &site);  // the second half of the route: maps without anchors
+    }
+  }
+  Store(EveryThirdMap(), &plain);
+  LocalizeOptions unplaced_too = kOptions;
+  unplaced_too.sure_needs_site = false;
+  size_t sure_unplaced = 0, sure_unplaced_if_allowed = 0, sure_plain = 0;
+  for (size_t q = half + 1; q < DemoMaps().size(); q += 6) {
+    const LocalMap query = MovedDemoMap(q);
+    const Localization in_site = LocalizeIn(site, query);
+    sure_unplaced += in_site.verdict.sure && !in_site.verdict.collection_pose;
+    const Localization allowed = LocalizeIn(site, query, unplaced_too);
+    sure_unplaced_if_allowed += allowed.verdict.sure && !allowed.verdict.collection_pose;
+    sure_plain += LocalizeIn(plain, query).verdict.sure;
+  }
+  EXPECT_EQ(sure_unplaced, 0u);
+  EXPECT_GE(sure_unplaced_if_allowed, 2u);
+  EXPECT_GE(sure_plain, sure_unplaced_if_allowed);
+}
+
+// The hit whose anchor gives the site pose is returned even where it ranks
+// past top_k (after the top_k hits): a robot asking for one hit, whose best
+// map was stored without an anchor, still learns where it is.
+TEST(LocalizerTest, TheHitGivingTheSitePoseIsReturnedPastTopK) {
+  MemoryCollection collection;
+  Store(EveryThirdMap(), &collection);  // stored without anchors
+  for (size_t i : EveryThirdMap()) {  // the same maps anchored; equal fits rank the lower id first
+    const uint64_t id = 100000 + i;
+    ASSERT_TRUE(collection.Add(id, DemoPlace(i), MapSource::Route{2, i + 1}, DemoMaps()[i].trajectory).ok());
+    ASSERT_TRUE(collection.SetAnchor(id, DemoMaps()[i].truth.global_frame));
+  }
+  LocalizeOptions one = kOptions;
+  one.top_k = 1;
+  size_t named_past_top_k = 0;
+  for (size_t q = 13; q < DemoMaps().size(); q += 12) {
+    const Localization l = LocalizeIn(collection, MovedDemoMap(q), one);
+    ASSERT_LE(l.hits.size(), 2u) << q;
+    if (!l.verdict.collection_pose) continue;
+    ASSERT_LT(l.verdict.collection_pose_hit, l.hits.size()) << q;
+    EXPECT_TRUE(collection.AnchorOf(l.hits[l.verdict.collection_pose_hit].map_id).has_value()) << q;
+    if (l.hits.size() == 2) {
+      EXPECT_EQ(l.verdict.collection_pose_hit, 1u) << q;
+      EXPECT_FALSE(collection.AnchorOf(l.hits[0].map_id).has_value()) << q;
+      ++named_past_top_k;
+    }
+  }
+  EXPECT_GE(named_past_top_k, 2u);
+}
+
 // A robot that drove through a room no stored map shows sends an earlier
 // map that fits nowhere, and the mean fit of its maps (sequence_min_score)
 // falls short. Where another earlier map fits where its odometry puts it,
@@ -1029,23 +1090,26 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
 // route_same_place_m of a chosen neighbour's guess on the site. One naming
 // another place (the chosen map's votes may name a look-alike stretch) is
 // verified too. Without anchors the route alone decides, as before.
+// A first-stage hypothesis that puts `query`'s own frame at `site_xy`
+// through demo map `id`'s true pose as its anchor (no turn: the db heading
+// is the query's).
+PlaceHypothesis HypothesisAt(const LocalQuery& query, uint64_t id, const Point2& site_xy) {
+  const Pose2 in_db = Compose(Inverse(DemoMaps()[id].truth.global_frame), Pose2{site_xy.x, site_xy.y, 0.0});
+  const double c = std::cos(query.map->heading), s = std::sin(query.map->heading);
+  PlaceHypothesis h;
+  h.map_id = id;
+  h.db_heading = query.map->heading;
+  h.translation = {c * in_db.x + s * in_db.y, -s * in_db.x + c * in_db.y};  // in_db turned by -heading
+  h.votes = 10;
+  return h;
+}
+
 TEST(LocalizerTest, ARouteNeighbourNamingAnotherSitePlaceIsVerifiedToo) {
   MemoryCollection site, unanchored;
   StoreAnchored({100, 101}, &site);
   Store({100, 101}, &unanchored);
   const LocalQuery query = PrepareLocalQuery(DemoMaps()[120], kOptions, &DemoPlace(120));
-  // A hypothesis that puts the query's own frame at `site_xy` through map
-  // `id`'s anchor (no turn: the db heading is the query's).
-  auto hypothesis_at = [&](uint64_t id, const Point2& site_xy) {
-    const Pose2 in_db = Compose(Inverse(DemoMaps()[id].truth.global_frame), Pose2{site_xy.x, site_xy.y, 0.0});
-    const double c = std::cos(query.map->heading), s = std::sin(query.map->heading);
-    PlaceHypothesis h;
-    h.map_id = id;
-    h.db_heading = query.map->heading;
-    h.translation = {c * in_db.x + s * in_db.y, -s * in_db.x + c * in_db.y};  // in_db turned by -heading
-    h.votes = 10;
-    return h;
-  };
+  auto hypothesis_at = [&](uint64_t id, const Point2& site_xy) { return HypothesisAt(query, id, site_xy); };
   const Pose2 a = DemoMaps()[100].truth.global_frame;
   const Point2 place{a.x + 1.0, a.y};
   const Point2 beside{place.x + kOptions.route_same_place_m * 0.5, place.y};
@@ -1064,6 +1128,40 @@ TEST(LocalizerTest, ARouteNeighbourNamingAnotherSitePlaceIsVerifiedToo) {
   const Pose2 on_site = Compose(a, chosen[0].guesses[0]);
   EXPECT_NEAR(on_site.x, place.x, 1e-9);
   EXPECT_NEAR(on_site.y, place.y, 1e-9);
+}
+
+// Anchored maps verified besides a choice crowded by maps without anchors
+// name places apart: one whose hypotheses put the query where an anchored
+// candidate already does is left for one naming another place (a twin room
+// is told apart only by an anchored map of each).
+TEST(LocalizerTest, AnchoredMapsVerifiedBesidesTheChoiceNamePlacesApart) {
+  MemoryCollection site;
+  StoreAnchored({100, 101, 102}, &site);
+  ASSERT_TRUE(site.Add(500, DemoPlace(120), MapSource::Route{2, 1}).ok());  // no anchor
+  const LocalQuery query = PrepareLocalQuery(DemoMaps()[120], kOptions, &DemoPlace(120));
+  const Pose2 a = DemoMaps()[100].truth.global_frame;
+  const Point2 place{a.x + 1.0, a.y};
+  const Point2 beside{place.x + kOptions.route_same_place_m * 0.5, place.y};
+  const Point2 elsewhere{place.x + kOptions.route_same_place_m * 3, place.y};
+  PlaceHypothesis unanchored;
+  unanchored.map_id = 500;
+  unanchored.votes = 20;
+  LocalizeOptions options = kOptions;
+  options.verify_maps = 1;  // the map without an anchor fills the choice
+  options.verify_anchored_maps = 3;
+  const std::vector<PlaceHypothesis> hypotheses = {unanchored, HypothesisAt(query, 100, place),
+                                                   HypothesisAt(query, 101, beside),
+                                                   HypothesisAt(query, 102, elsewhere)};
+  std::vector<uint64_t> ids;
+  for (const auto& c : localize_internal::ChooseCandidates(query, site, hypotheses, options)) ids.push_back(c.map_id);
+  EXPECT_EQ(ids, (std::vector<uint64_t>{500, 100, 102}));
+  // Where no map without an anchor is chosen, none is added.
+  options.verify_maps = 2;
+  ids.clear();
+  for (const auto& c : localize_internal::ChooseCandidates(query, site, {HypothesisAt(query, 100, place)}, options)) {
+    ids.push_back(c.map_id);
+  }
+  EXPECT_EQ(ids, (std::vector<uint64_t>{100}));
 }
 
 // A map passed over for a route neighbour gets its own chance when every
