@@ -296,8 +296,8 @@ struct LocalizeOptions {
   // margin already asks this. lmd-bench load, robots asking globally in the
   // simulated building of repeated rooms, 40 s (docs/results.md, 28th
   // stop): sure answers with the top hit elsewhere or the site pose off, 40
-  // robots 30 of 741 -> 0 of 270, 150 robots 86 of 3,030 -> 7 of 1,035. No
-  // threshold of its own.
+  // robots 30 of 741 -> 0 of 270, 150 robots 84 of 3,030 -> 6 of 1,035 (a
+  // second pair: 100 of 3,341 -> 4 of 1,034). No threshold of its own.
   bool sure_needs_site = true;
   size_t top_k = 10;  // hits returned
   // Prior queries (prior.h): anchored maps matched, nearest the predicted
