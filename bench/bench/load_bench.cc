@@ -492,7 +492,7 @@ int RunLoadBench(int argc, char** argv) {
   // with a top hit at the right place).
   const SeededPlaces seeded(base);
   size_t answered = 0, localised = 0, detects_ok = 0, reduced = 0, sure = 0, sure_elsewhere = 0;
-  size_t sure_elsewhere_seeded = 0, sure_site_off = 0;
+  size_t sure_elsewhere_seeded = 0, sure_site_off = 0, sure_wrong = 0;
   for (int r = 0; r < options.robots; ++r) {
     for (size_t t = 0; t < rows[r].size(); ++t) {
       detects_ok += rows[r][t].answered, reduced += rows[r][t].reduced_depth;
@@ -506,7 +506,9 @@ int RunLoadBench(int argc, char** argv) {
         ++sure_elsewhere;
         sure_elsewhere_seeded += seeded.Shows(robot_maps[r][t]);
       }
-      sure_site_off += rows[r][t].localized && rows[r][t].posed && !rows[r][t].right;
+      const bool site_off = rows[r][t].localized && rows[r][t].posed && !rows[r][t].right;
+      sure_site_off += site_off;
+      sure_wrong += site_off || (rows[r][t].localized && !shows_place);
     }
   }
   const double place_at_1 = answered > 0 ? static_cast<double>(localised) / static_cast<double>(answered) : 0.0;
@@ -520,9 +522,9 @@ int RunLoadBench(int argc, char** argv) {
               first_error.empty() ? "" : " first error: ", first_error.c_str());
   std::printf("localisation: the top hit shows the robot's place for %zu of %zu answered DetectChanges (%.3f); "
               "lmdd was sure of %zu (%.3f), %zu of them with a top hit elsewhere (%zu at a place a seeded map shows), "
-              "%zu with a site pose off by more than 0.2 m or 1 deg\n",
+              "%zu with a site pose off by more than 0.2 m or 1 deg; wrong either way %zu\n",
               localised, answered, place_at_1, sure, answered > 0 ? static_cast<double>(sure) / answered : 0.0,
-              sure_elsewhere, sure_elsewhere_seeded, sure_site_off);
+              sure_elsewhere, sure_elsewhere_seeded, sure_site_off, sure_wrong);
   const double reduced_share = detects_ok > 0 ? static_cast<double>(reduced) / static_cast<double>(detects_ok) : 0.0;
   std::printf("lmdd was busy and answered %zu of %zu DetectChanges at its reduced depth (%.3f)\n", reduced, detects_ok,
               reduced_share);
