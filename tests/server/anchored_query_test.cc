@@ -271,6 +271,31 @@ TEST_F(AnchoredQueryTest, ASequenceQueryAnswersInTheSiteFrameWhereUnanchoredMaps
   EXPECT_EQ(plain.hits(0).map_id().rfind("lost-", 0), 0u) << plain.hits(0).map_id();
 }
 
+// Where maps without anchors crowd a place, a global answer's best hit has
+// no anchor: the anchored hit that gives its site pose is returned after the
+// hits asked for, and a sure answer in a site always has that pose.
+TEST_F(AnchoredQueryTest, AGlobalAnswerNamesItsSitePoseHitPastTopK) {
+  const size_t q = 61;
+  v1::InsertMapsRequest crowd;
+  for (size_t copy = 0; copy < 3; ++copy) {
+    *crowd.add_maps() =
+        OneMapRequest("site", "lost-" + std::to_string(copy), ToProto(DemoMaps()[q])).maps(0);
+  }
+  v1::InsertMapsResponse inserted;
+  ASSERT_TRUE(server_->client().InsertMaps(crowd, &inserted).ok());
+  v1::RetrieveRequest request = Query(q - 1);  // map q itself, seen again
+  request.set_top_k(1);
+  v1::RetrieveResponse response;
+  ASSERT_TRUE(server_->client().Retrieve(request, &response).ok());
+  ASSERT_EQ(response.hits_size(), 2);
+  EXPECT_EQ(response.hits(0).map_id().rfind("lost-", 0), 0u) << response.hits(0).map_id();
+  const v1::Localization& verdict = response.localization();
+  ASSERT_TRUE(verdict.has_collection_pose());
+  EXPECT_EQ(verdict.collection_pose_map_id(), response.hits(1).map_id());
+  EXPECT_EQ(verdict.collection_pose_map_id().rfind("lost-", 0), std::string::npos);
+  EXPECT_LT(Distance(verdict.collection_pose(), DemoMaps()[q].truth.global_frame), 0.1);
+}
+
 TEST_F(AnchoredQueryTest, ASureAnswerAnchorsTheMapInsertedNext) {
   const LocalMap& map = DemoMaps()[46];  // not stored; overlaps stored map 45
   v1::DetectChangesRequest detect;
