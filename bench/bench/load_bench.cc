@@ -496,8 +496,14 @@ int RunLoadBench(int argc, char** argv) {
   for (int r = 0; r < options.robots; ++r) {
     for (size_t t = 0; t < rows[r].size(); ++t) {
       detects_ok += rows[r][t].answered, reduced += rows[r][t].reduced_depth;
+      // The site pose is checked against the truth whatever the top hit.
+      const bool site_off = rows[r][t].localized && rows[r][t].posed && !rows[r][t].right;
+      sure_site_off += site_off;
       const LocalMap* hit = MapOfId(rows[r][t].top_hit, base, robot_maps, options.first_robot);
-      if (hit == nullptr) continue;
+      if (hit == nullptr) {
+        sure_wrong += site_off;
+        continue;
+      }
       ++answered;
       const bool shows_place = PlaceOverlap(robot_maps[r][t], *hit) >= 0.5;
       localised += shows_place;
@@ -506,8 +512,6 @@ int RunLoadBench(int argc, char** argv) {
         ++sure_elsewhere;
         sure_elsewhere_seeded += seeded.Shows(robot_maps[r][t]);
       }
-      const bool site_off = rows[r][t].localized && rows[r][t].posed && !rows[r][t].right;
-      sure_site_off += site_off;
       sure_wrong += site_off || (rows[r][t].localized && !shows_place);
     }
   }

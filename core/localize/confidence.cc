@@ -67,12 +67,14 @@ int SiteNamingHit(const std::vector<JudgedHit>& hits) {
 bool SitePlaceClear(const std::vector<JudgedHit>& hits, int named, double named_other_pose,
                     const ConfidenceOptions& options) {
   if (named < 0) return false;
-  const Pose2& place = *hits[static_cast<size_t>(named)].collection_pose;
+  const JudgedHit& naming = hits[static_cast<size_t>(named)];
   double elsewhere = named_other_pose;
   for (const JudgedHit& h : hits) {
-    if (h.collection_pose && !OnePlace(place, *h.collection_pose, options)) elsewhere = std::max(elsewhere, h.score);
+    // As Judge compares: hits further below than agreement_window are no rivals.
+    if (!h.collection_pose || h.score < naming.score - options.agreement_window) continue;
+    if (!OnePlace(*naming.collection_pose, *h.collection_pose, options)) elsewhere = std::max(elsewhere, h.score);
   }
-  return ClearLead(hits[static_cast<size_t>(named)].score, elsewhere, options);
+  return ClearLead(naming.score, elsewhere, options);
 }
 
 bool ClearLead(double best_score, double rival_score, const ConfidenceOptions& options) {
@@ -127,14 +129,11 @@ Verdict Judge(std::vector<JudgedHit>* hits, const ConfidenceOptions& options, do
   // site, the best hit's place is not known (lmd-bench load, simulated
   // building, global queries: the top hit a twin room 6-39 m away, sure).
   bool places_apart = false;
-  const Pose2* named = nullptr;  // the first agreeing anchored hit's place
-  for (const JudgedHit& h : *hits) {
-    if (!h.agrees_with_best || !h.collection_pose) continue;
-    if (named == nullptr) {
-      named = &*h.collection_pose;
-    } else if (!OnePlace(*named, *h.collection_pose, options)) {
-      places_apart = true;
-    }
+  if (const int named = SiteNamingHit(*hits); named >= 0) {
+    const Pose2& place = *(*hits)[static_cast<size_t>(named)].collection_pose;
+    places_apart = std::any_of(hits->begin(), hits->end(), [&](const JudgedHit& h) {
+      return h.agrees_with_best && h.collection_pose && !OnePlace(place, *h.collection_pose, options);
+    });
   }
   v.sure = !places_apart && ClearLead(v.best_score, v.rival_score, options);
   if (options.max_pose_spread_m > 0 &&

@@ -166,8 +166,9 @@ struct Verdict {
   bool sequence_by_newest = false;
   // The query's own frame in the collection's frame: the best hit's
   // collection_pose or, where its map is not anchored (stored by a robot
-  // that did not know where it was), that of the best returned hit that
-  // agrees with it and is anchored (Localization::hits[collection_pose_hit]);
+  // that did not know where it was), that of the best hit that agrees with
+  // it and is anchored (Localization::hits[collection_pose_hit]: returned
+  // after the top_k hits where it ranks past them);
   // where at least three agreeing anchored maps fit, their fused measure of
   // it (LocalizeOptions::fuse_site_pose).
   std::optional<Pose2> collection_pose;
@@ -206,11 +207,14 @@ bool ClearLead(double best_score, double rival_score, const ConfidenceOptions& o
 int SiteNamingHit(const std::vector<JudgedHit>& hits);
 
 // Whether the anchored hits name the answer's place in the site: the naming
-// hit `named` leads every anchored hit elsewhere (not OnePlace with it) and
-// its own map's best other pose (`named_other_pose`, 0: none) as a sure
+// hit `named` leads every anchored hit elsewhere (not OnePlace with it;
+// those more than agreement_window below it are no rivals, as in Judge)
+// and its own map's best other pose (`named_other_pose`, 0: none) as a sure
 // answer's best must (ClearLead). Maps without anchors cannot name it:
 // identical rooms agree by what they saw, so where the best map has no
-// anchor the site's place rests on the anchored maps' own fits.
+// anchor the site's place rests on the anchored maps' own fits. Where the
+// best hit is anchored, it names the place, and a verdict Judge made sure
+// passes this too.
 bool SitePlaceClear(const std::vector<JudgedHit>& hits, int named, double named_other_pose,
                     const ConfidenceOptions& options);
 

@@ -212,10 +212,13 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
   // its anchored hits do not name (sure_needs_site). Where the naming hit is
   // not the best, its own map's other poses are look-alikes too (a map may
   // show two identical rooms); the best's were searched above.
+  const int named = SiteNamingHit(judged);
   if (out->verdict.sure && options.sure_needs_site && site_maps.source != nullptr && site_maps.source->HasAnchors()) {
-    const int named = SiteNamingHit(judged);
-    const double other = named > 0 && second_pose ? second_pose(hits[static_cast<size_t>(named)]) : 0.0;
-    out->verdict.sure = SitePlaceClear(judged, named, other, options.confidence);
+    out->verdict.sure = SitePlaceClear(judged, named, 0.0, options.confidence);
+    if (out->verdict.sure && named > 0 && second_pose) {  // the search only where it could matter
+      const double other = second_pose(hits[static_cast<size_t>(named)]);
+      out->verdict.sure = SitePlaceClear(judged, named, other, options.confidence);
+    }
   }
   SetConfidence(&out->verdict, !hits.empty(), options.confidence);
   for (size_t i = 0; i < hits.size(); ++i) hits[i].agrees_with_best = judged[i].agrees_with_best;
@@ -237,18 +240,15 @@ void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vect
     out->stats.changes_ms += MsSince(t);
   }
   const std::optional<Pose2> site = options.fuse_site_pose ? FusedSitePose(hits, options.confidence) : std::nullopt;
-  const auto named = std::find_if(hits.begin(), hits.end(), [](const LocalizedHit& h) {
-    return h.collection_pose && h.agrees_with_best;  // the best agrees with itself
-  });
-  if (named != hits.end()) {
-    out->verdict.collection_pose = site ? site : named->collection_pose;
-    out->verdict.collection_pose_hit = static_cast<size_t>(named - hits.begin());
+  if (named >= 0 && options.top_k > 0) {  // (the best agrees with itself; top_k 0 returns no hit)
+    out->verdict.collection_pose = site ? site : hits[static_cast<size_t>(named)].collection_pose;
+    out->verdict.collection_pose_hit = static_cast<size_t>(named);
   }
   if (hits.size() > options.top_k) {
     // The hit that gives the site pose is returned, after the top_k where
     // it ranks lower: a robot asking for few hits still learns its place.
-    if (named != hits.end() && out->verdict.collection_pose_hit >= options.top_k) {
-      std::swap(hits[options.top_k], *named);
+    if (out->verdict.collection_pose && out->verdict.collection_pose_hit >= options.top_k) {
+      std::swap(hits[options.top_k], hits[out->verdict.collection_pose_hit]);
       out->verdict.collection_pose_hit = options.top_k;
       hits.resize(options.top_k + 1);
     } else {
@@ -400,13 +400,13 @@ Point2 SitePoint(const Pose2& anchor, const Pose2& guess) {
 }
 
 // Where maps without anchors are among the candidates: anchored maps of
-// `pool` neither chosen nor passed over (`seen`), best-voted first, with all
-// their hypotheses in `pool` as guesses, until options.verify_anchored_maps
-// of the candidates are anchored. A map joins only where one of its
-// hypotheses puts the query at a place in the site (route_same_place_m) no
-// anchored candidate puts it yet: identical rooms are told apart only by
-// anchored maps of each, and a place many maps show would otherwise take
-// every slot.
+// `pool` neither chosen nor passed over (`seen`), best-voted first, until
+// options.verify_anchored_maps of the candidates are anchored. A map joins
+// at the first of its hypotheses that puts the query at a place in the
+// site (route_same_place_m) no anchored candidate puts it yet, with that
+// and its later hypotheses in `pool` as guesses: identical rooms are told
+// apart only by anchored maps of each, and a place many maps show would
+// otherwise take every slot.
 void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source, const std::vector<PlaceHypothesis>& pool,
                            const LocalizeOptions& options, const std::unordered_map<uint64_t, size_t>& seen,
                            std::vector<Candidate>* candidates) {

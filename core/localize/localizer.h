@@ -47,8 +47,9 @@ struct LocalizeOptions {
   size_t verify_maps = 20;
   // ... and, in a collection with anchored maps, the best-voted anchored
   // ones the choice left out, each naming a place in the site none of the
-  // others names, from all the first stage's hypotheses (the second round's
-  // too), until this many of the verified maps are anchored: where robots
+  // others names, from all the first stage's hypotheses (the 800 the second
+  // round reads, not the first 160), until this many of the verified maps
+  // are anchored: where robots
   // store maps without anchors they crowd the choice, and only anchored maps
   // tell identical rooms apart (Judge's one-place rule, sure_needs_site).
   // lmd-bench load, robots asking globally in the simulated building, 150
@@ -292,14 +293,14 @@ struct LocalizeOptions {
   // wall in each other's free space), and only anchors tell them apart; a
   // twin room's anchored map may agree too, and fit better where it saw more
   // of the room. A collection without anchors has no site to place an
-  // answer in, and is not affected; where the best hit is anchored, Judge's
-  // margin already asks this. lmd-bench load, robots asking globally in the
+  // answer in, and is not affected; one anchored map makes it a site. Where
+  // the best hit is anchored, Judge's margin already asks this. lmd-bench load, robots asking globally in the
   // simulated building of repeated rooms, 40 s (docs/results.md, 28th
   // stop): sure answers with the top hit elsewhere or the site pose off, 40
   // robots 30 of 741 -> 0 of 270, 150 robots 84 of 3,030 -> 6 of 1,035 (a
   // second pair: 100 of 3,341 -> 4 of 1,034). No threshold of its own.
   bool sure_needs_site = true;
-  size_t top_k = 10;  // hits returned
+  size_t top_k = 10;  // hits returned (and the hit giving the site pose, where it ranks past them)
   // Prior queries (prior.h): anchored maps matched, nearest the predicted
   // query first, and the window beyond the prior's radius; with
   // prior_first_stage, as many again from the first stage over the maps near
@@ -494,7 +495,7 @@ struct LocalizeStats {
 };
 
 struct Localization {
-  std::vector<LocalizedHit> hits;  // best first, at most top_k
+  std::vector<LocalizedHit> hits;  // best first, top_k at most, then the hit giving the site pose if it ranks past them
   Verdict verdict;
   std::vector<ChangeMask> changes;  // best first; db_map_id = a hit's map id
   LocalizeStats stats;

@@ -186,7 +186,7 @@ std::vector<AlignedMap> WithSiteMaps(const LocalQuery& query, const LocalizedHit
 // the change masks when asked and sure or the place is clear (`prior_place`:
 // a prior answered for the place, LocalizeOptions::prior_changes_without_margin;
 // `site_maps`: where the best hit has a site pose, against those maps too),
-// and the hits cut to top_k.
+// and the hits cut to top_k (the hit giving the site pose kept after them).
 void Conclude(const LocalQuery& query, const LocalizeOptions& options, std::vector<LocalizedHit> hits,
               const std::function<double(const LocalizedHit& best)>& second_pose, bool with_changes,
               Localization* out, bool prior_place, const SiteMaps& site_maps);

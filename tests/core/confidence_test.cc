@@ -352,6 +352,15 @@ TEST(JudgeTest, TheSitePlaceIsClearWhereItsAnchoredHitLeadsThoseElsewhere) {
   Judge(&unplaced, ThresholdsOnly());
   EXPECT_EQ(SiteNamingHit(unplaced), -1);
   EXPECT_FALSE(SitePlaceClear(unplaced, -1, 0.0, ThresholdsOnly()));
+  // An anchored best names the place itself, and a verdict Judge made sure
+  // stays clear: a hit elsewhere further below than agreement_window is no
+  // rival, whatever margin the global line would ask of it.
+  std::vector<JudgedHit> anchored_best = {{0.7, kQueryPose, &m.room, false, here},
+                                          {0.38, kQueryPose, &m.room, false, twin}};
+  const Verdict judged_sure = Judge(&anchored_best);
+  EXPECT_TRUE(judged_sure.sure);
+  EXPECT_EQ(SiteNamingHit(anchored_best), 0);
+  EXPECT_EQ(SitePlaceClear(anchored_best, 0, 0.0, ConfidenceOptions{}), judged_sure.sure);
 }
 
 TEST(JudgeTest, ASelfRivalWithinTheMarginMakesItNotSure) {

@@ -1085,11 +1085,6 @@ TEST(LocalizerTest, RouteNeighboursAreVerifiedThroughOneMap) {
   }
 }
 
-// In a site map a route neighbour is passed over only when it repeats the
-// chosen map's place: its hypothesis putting the query within
-// route_same_place_m of a chosen neighbour's guess on the site. One naming
-// another place (the chosen map's votes may name a look-alike stretch) is
-// verified too. Without anchors the route alone decides, as before.
 // A first-stage hypothesis that puts `query`'s own frame at `site_xy`
 // through demo map `id`'s true pose as its anchor (no turn: the db heading
 // is the query's).
@@ -1104,6 +1099,11 @@ PlaceHypothesis HypothesisAt(const LocalQuery& query, uint64_t id, const Point2&
   return h;
 }
 
+// In a site map a route neighbour is passed over only when it repeats the
+// chosen map's place: its hypothesis putting the query within
+// route_same_place_m of a chosen neighbour's guess on the site. One naming
+// another place (the chosen map's votes may name a look-alike stretch) is
+// verified too. Without anchors the route alone decides, as before.
 TEST(LocalizerTest, ARouteNeighbourNamingAnotherSitePlaceIsVerifiedToo) {
   MemoryCollection site, unanchored;
   StoreAnchored({100, 101}, &site);
