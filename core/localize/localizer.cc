@@ -449,7 +449,8 @@ void AddAnchoredCandidates(const LocalQuery& query, const MapSource& source, con
 
 std::vector<Candidate> ChooseCandidates(const LocalQuery& query, const MapSource& source,
                                         const std::vector<PlaceHypothesis>& hypotheses, const LocalizeOptions& options,
-                                        std::vector<PassedOver>* passed, const std::vector<PlaceHypothesis>* anchored_pool) {
+                                        std::vector<PassedOver>* passed,
+                                        const std::vector<PlaceHypothesis>* anchored_pool) {
   std::vector<Candidate> candidates;
   struct Chosen {
     MapSource::Route route;

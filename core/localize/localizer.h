@@ -49,13 +49,13 @@ struct LocalizeOptions {
   // ones the choice left out, each naming a place in the site none of the
   // others names, from all the first stage's hypotheses (the 800 the second
   // round reads, not the first 160), until this many of the verified maps
-  // are anchored: where robots
-  // store maps without anchors they crowd the choice, and only anchored maps
-  // tell identical rooms apart (Judge's one-place rule, sure_needs_site).
-  // lmd-bench load, robots asking globally in the simulated building, 150
-  // robots: sure answers with the top hit in a twin room 68 of 3,501 -> 26
-  // of 3,347 (the best-voted 4 of the first 160 hypotheses), lmdd CPU per
-  // robot-second the same (docs/results.md, 27th stop). 0: off.
+  // are anchored: where robots store maps without anchors they crowd the
+  // choice, and only anchored maps tell identical rooms apart (Judge's
+  // one-place rule, sure_needs_site). lmd-bench load, robots asking
+  // globally in the simulated building, 150 robots: sure answers with the
+  // top hit in a twin room 68 of 3,501 -> 26 of 3,347 (the best-voted 4 of
+  // the first 160 hypotheses), lmdd CPU per robot-second the same
+  // (docs/results.md, 27th stop). 0: off.
   size_t verify_anchored_maps = 4;
   // A place is verified through few of its maps: a map whose route
   // neighbour (same robot, at most route_window numbers apart) is already
@@ -294,11 +294,12 @@ struct LocalizeOptions {
   // twin room's anchored map may agree too, and fit better where it saw more
   // of the room. A collection without anchors has no site to place an
   // answer in, and is not affected; one anchored map makes it a site. Where
-  // the best hit is anchored, Judge's margin already asks this. lmd-bench load, robots asking globally in the
-  // simulated building of repeated rooms, 40 s (docs/results.md, 28th
-  // stop): sure answers with the top hit elsewhere or the site pose off, 40
-  // robots 30 of 741 -> 0 of 270, 150 robots 84 of 3,030 -> 6 of 1,035 (a
-  // second pair: 100 of 3,341 -> 4 of 1,034). No threshold of its own.
+  // the best hit is anchored, Judge's margin already asks this. lmd-bench
+  // load, robots asking globally in the simulated building of repeated
+  // rooms, 40 s (docs/results.md, 28th stop): sure answers with the top hit
+  // elsewhere or the site pose off, 40 robots 30 of 741 -> 0 of 270, 150
+  // robots 84 of 3,030 -> 6 of 1,035 (a second pair: 100 of 3,341 -> 4 of
+  // 1,034). No threshold of its own.
   bool sure_needs_site = true;
   size_t top_k = 10;  // hits returned (and the hit giving the site pose, where it ranks past them)
   // Prior queries (prior.h): anchored maps matched, nearest the predicted

@@ -314,7 +314,9 @@ TEST(LocalizerTest, AnchoredMapsAreVerifiedWhereMapsWithoutAnchorsCrowdTheChoice
       localize_internal::SearchTrace trace;
       localize_internal::SearchAndVerify(query, collection, options, {}, &stats, &trace);
       size_t anchored = 0;
-      for (const localize_internal::Candidate& c : trace.verified) anchored += collection.AnchorOf(c.map_id).has_value();
+      for (const localize_internal::Candidate& c : trace.verified) {
+        anchored += collection.AnchorOf(c.map_id).has_value();
+      }
       return anchored;
     };
     const size_t without = anchored_verified(none), with = anchored_verified(few);
