@@ -269,11 +269,6 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
                         source.NearestAnchored(path, prior.radius_m + reach, kBoundedPerMatched * maps, excluded),
                         maps, &near_match);
   std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, &out.stats);
-  if (options.prior_second_pose && !tight) {
-    for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) {
-      hits.push_back(std::move(hit));
-    }
-  }
   auto keep_each_once = [&](std::vector<LocalizedHit>* kept) {
     // Each map once, at its better fit; none that the match moved outside the prior.
     SortHits(kept, options);
@@ -287,17 +282,27 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   // Fitted to global answers; a prior rules most look-alikes out itself.
   judged.confidence.min_global_probability = 0.0;
   // Whether a robot's nearest maps already make a sure answer.
-  bool nearest_sure = false;
-  if (options.prior_first_stage) {
-    std::vector<LocalizedHit> kept = hits;
+  auto sure_from = [&](const std::vector<LocalizedHit>& these) {
+    if (!options.prior_first_stage) return false;
+    std::vector<LocalizedHit> kept = these;
     keep_each_once(&kept);
     std::vector<JudgedHit> as_judged = AsJudged(kept);
-    nearest_sure = Judge(&as_judged, judged.confidence).sure;
     // Maps that may bend more than a sure answer's promise allows cannot
     // make one, whatever their fit (Conclude adds their bends).
-    if (nearest_sure && query.map && kept.front().db) {
-      nearest_sure = PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence);
+    return Judge(&as_judged, judged.confidence).sure &&
+           (!query.map || !kept.front().db ||
+            PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence));
+  };
+  bool nearest_sure = sure_from(hits);
+  // Where they do not, each map's best pose away from the one found may be
+  // what was missing (a corridor the search shifted along itself). Where
+  // they do, a shifted best is still caught: Conclude searches the best
+  // map's other poses before it says sure.
+  if (options.prior_second_pose && !tight && !nearest_sure) {
+    for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) {
+      hits.push_back(std::move(hit));
     }
+    nearest_sure = sure_from(hits);
   }
   if (options.prior_first_stage && !nearest_sure) {
     for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, &out.stats)) {
