@@ -173,13 +173,19 @@ OccupancyGrid BuildOccupancyGrid(const LocalMap& map, double rotation, const Gri
       traced = &sc.pose;
       const Point2 o = rot(sc.pose.x, sc.pose.y);
       const double clear = std::min<double>(options.no_return_clear_m, sc.max_range);
+      double last_fx = std::numeric_limits<double>::quiet_NaN(), last_fy = last_fx;
+      bool last_hit = false;
       for (size_t i = 0; i < sc.ranges.size(); ++i) {
         const double r = sc.ranges[i];
         if (!(r > 0.0) || !std::isfinite(r)) continue;
         const bool hit = r < sc.max_range;
         const double len = hit ? r : clear;
         const double a = sc.pose.theta + sc.first_angle + static_cast<double>(i) * sc.angle_step - rotation;
-        TraceFree(grid, cells, o.x, o.y, o.x + len * std::cos(a), o.y + len * std::sin(a), hit);
+        const double ex = o.x + len * std::cos(a), ey = o.y + len * std::sin(a);
+        const double fx = std::floor((ex - min_x) / cell), fy = std::floor((ey - min_y) / cell);
+        if (options.one_beam_per_end_cell && fx == last_fx && fy == last_fy && hit == last_hit) continue;
+        last_fx = fx, last_fy = fy, last_hit = hit;
+        TraceFree(grid, cells, o.x, o.y, ex, ey, hit);
       }
     }
   } else if (!map.trajectory.empty()) {
