@@ -42,6 +42,9 @@ constexpr size_t kPriorStageReads = 30000;
 // global search's many peaks along a corridor (place_index.h) add cost and
 // no place (served prior run, all logs: place@1 .948 -> .950 with 8).
 constexpr size_t kPriorPeaksPerMap = 2;
+// Of a loose prior's nearest maps, verified at least before a verdict: a
+// sure site pose needs the best and two more agreeing maps (confidence.h).
+constexpr size_t kVerifiedBeforeSure = 3;
 constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
 // The first stage's maps near the prior: at most this many of each 10 m
 // cell, the newest (anchor_index.h). A bound on cost where a fleet piles up
@@ -268,7 +271,7 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
       NearestCandidates(query, source, options, prior,
                         source.NearestAnchored(path, prior.radius_m + reach, kBoundedPerMatched * maps, excluded),
                         maps, &near_match);
-  std::vector<LocalizedHit> hits = VerifyCandidates(query, source, nearest, options, near_match, &out.stats);
+  std::vector<LocalizedHit> hits;
   auto keep_each_once = [&](std::vector<LocalizedHit>* kept) {
     // Each map once, at its better fit; none that the match moved outside the prior.
     SortHits(kept, options);
@@ -293,7 +296,18 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
            (!query.map || !kept.front().db ||
             PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence));
   };
-  bool nearest_sure = sure_from(hits);
+  // A loose prior's nearest maps are verified best-bounded first, until
+  // those verified make a sure answer (LocalizeOptions::prior_maps); a
+  // tight prior's all, as its window is narrow and a verdict from all of
+  // them more often right.
+  bool nearest_sure = false;
+  const size_t first_verdict = tight ? nearest.size() : std::min(nearest.size(), kVerifiedBeforeSure);
+  for (size_t i = 0; i < nearest.size() && !nearest_sure; ++i) {
+    for (LocalizedHit& hit : VerifyCandidates(query, source, {nearest[i]}, options, near_match, &out.stats)) {
+      hits.push_back(std::move(hit));
+    }
+    if (i + 1 >= first_verdict) nearest_sure = sure_from(hits);
+  }
   // Where they do not, each map's best pose away from the one found may be
   // what was missing (a corridor the search shifted along itself). Where
   // they do, a shifted best is still caught: Conclude searches the best

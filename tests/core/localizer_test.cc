@@ -598,6 +598,38 @@ TEST(LocalizerTest, ALoosePriorSearchesItsMapsSecondPosesWhereTheirFirstLeaveItU
   EXPECT_GT(skipped, 0u) << "of " << queries;
 }
 
+// A loose prior's nearest maps are verified best-bounded first until those
+// verified (three at least) make a sure answer; a tight prior's are all
+// verified. The sure answers are right either way.
+TEST(LocalizerTest, ALoosePriorVerifiesItsNearestMapsUntilTheyMakeASureAnswer) {
+  MemoryCollection collection;
+  StoreAnchored(EveryThirdMap(), &collection);
+  size_t sure_loose = 0, sure_before_all = 0, sure_tight = 0;
+  for (size_t q = 4; q < DemoMaps().size(); q += 11) {
+    const LocalMap map = MovedDemoMap(q);
+    const LocalQuery query = PrepareLocalQuery(map, kOptions);
+    const Pose2 truth = map.truth.global_frame;
+    const auto excluded = [q](uint64_t id) { return id + 10 > q && id < q + 10; };  // its own stretch of route
+    const Localization loose =
+        LocalizeNear(query, collection, kOptions, PriorOff(truth, {-1.0, 1.5, 12.0}, 3.5, 20.0), excluded);
+    const Localization tight =
+        LocalizeNear(query, collection, kOptions, PriorOff(truth, {0.2, -0.1, 1.5}, 0.4, 3.0), excluded);
+    if (loose.verdict.sure) {
+      ++sure_loose;
+      EXPECT_TRUE(SitePoseAt(loose, truth)) << q;
+      EXPECT_GE(loose.stats.maps_matched, 3u) << q;
+      sure_before_all += loose.stats.maps_matched < kOptions.prior_maps;
+    }
+    if (tight.verdict.sure) {
+      ++sure_tight;
+      EXPECT_TRUE(SitePoseAt(tight, truth)) << q;
+      EXPECT_GE(tight.stats.maps_matched, kOptions.tight_prior_maps) << q;
+    }
+  }
+  EXPECT_GT(sure_before_all, 0u) << "of " << sure_loose << " sure";
+  EXPECT_GT(sure_tight, 0u);
+}
+
 // A robot's prior query is also searched on the site grid (the anchored
 // maps near the prior fused): it lands at its true site pose, and the maps
 // that explain most of it there are the hits, best first, each once; from
