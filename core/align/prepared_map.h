@@ -44,9 +44,10 @@ struct PreparedMapOptions {
   // Free space (PrepareMap only, maps with scans or a trajectory): beams
   // ray-cast on a grid (cell 0.1 m, cropped 12 m around the trajectory) so
   // that query points landing in space the db map saw empty count as conflicts.
-  // Scans 10 cm apart and within 5 deg clear nearly the same 10 cm cells:
-  // one is traced; and of a scan's beams that end in one cell, one
-  // (fr079's 0.5 deg laser: the free space's instructions -30 %).
+  // Scans 25 cm apart and within 5 deg clear nearly the same 10 cm cells:
+  // one is traced; and of consecutive beams of a scan that end in one cell,
+  // one (fr079's 0.5 deg laser: 30 % fewer instructions building the free
+  // space).
   bool free_space = true;
   //
   // A beam with no return clears nothing here: it met glass, a dark or

@@ -38,10 +38,11 @@ struct GridOptions {
   // per 5 m map, 11 times intel's rays) would otherwise cost that much more.
   double min_scan_spacing_m = 0.0;
   double min_scan_turn_deg = 0.0;
-  // A beam that ends in the cell the last traced beam of its scan ended in
-  // is not traced: both leave from the scan's origin, so it would clear the
-  // same cells but for a few at its end. A dense laser (0.25-0.5 deg) puts
-  // several beams in one cell within a few metres.
+  // A beam that ends in the cell the last traced beam of its scan ended in,
+  // with a return as that one had or without as it had none, is not traced:
+  // both leave from the scan's origin, so it would clear nearly the same
+  // cells (at most a few beside its path differ). A dense laser (0.25-0.5
+  // deg) puts several beams in one cell within a few metres.
   bool one_beam_per_end_cell = false;
 };
 

@@ -311,11 +311,10 @@ struct LocalizeOptions {
   // 23 -> 17, lmdd CPU +8 %; 8 gave .971 but 20 wrong at +25 % CPU. Held out
   // after: .940 -> .943 (8: .946), 39 -> 40 wrong, CPU +4 %. A loose
   // prior verifies them best-bounded first and stops once those verified
-  // (3 at least) make a sure answer: served, all logs back to back
-  // (2026-12-08), lmdd CPU 9.9 -> 8.4 ms median, place@1 the same, sure
-  // .496 -> .502 with the same 2 wrong, pose error 3.7 -> 3.8 cm median.
-  // A tight prior verifies all (with the stop, --mode tracking's sure
-  // answers were right 99.93 -> 99.82 %, at 5.3 -> 3.9 ms).
+  // make a sure answer that two more agreeing maps that fit confirm
+  // (prior.cc, kConfirmingMaps). A tight prior verifies all its
+  // tight_prior_maps: with the stop, --mode tracking's sure answers were
+  // right 99.93 -> 99.82 % (at 5.3 -> 3.9 ms of lmdd CPU).
   size_t prior_maps = 6;
   double prior_margin_m = 1.0;
   bool prior_first_stage = true;
@@ -327,8 +326,9 @@ struct LocalizeOptions {
   // wrong 59 -> 58 of about 3,130, lmdd CPU 8.1 -> 10.8 ms median. Found
   // with lmd-eval prior-misses on all nine logs. A sequence's check of where
   // a hypothesis puts each map skips it. Only where the nearest maps' first
-  // poses leave the answer unsure: where they make it sure, the verdict's
-  // search of the best map's other poses still catches a shifted best.
+  // poses leave the answer unsure: where they make it sure, a best shifted
+  // so is still caught as a rival (the verdict searches the best map's other
+  // poses), though another map's better shifted pose is not looked for.
   // Served, all queries back to back (2026-12-08): lmdd CPU held out 15.3 ->
   // 9.8 ms median, 117.8 -> 101.6 p99; place@1 and sure answers' precision
   // the same (.991, 2 wrong), sure .477 -> .478; 60 of 5,678 answers differ.
@@ -353,10 +353,10 @@ struct LocalizeOptions {
   // place@1, 45 wrong, 19.2 ms median.
   size_t prior_site_maps = 3;
   // A prior that is not tight runs the first stage only when the nearest
-  // maps' hits (with their next-best poses) do not already make a sure
-  // answer: the stage finds the place where the nearest maps do not show
-  // it, and the next-best poses already look for a rival within each of
-  // their windows. No threshold of its own (the verdict's). Served
+  // maps' hits do not already make a sure answer: the stage finds the place
+  // where the nearest maps do not show it; where they do, the verdict's
+  // search of the best map's other poses looks for a rival within the
+  // prior's window. No threshold of its own (the verdict's). Served
   // (lmd-eval served --mode prior --no-changes, 2026-12-05, back to back):
   // place@1 .982 either way (held out .978), sure .632 -> .635, sure and
   // wrong 53 -> 50 (tuning logs 20 -> 19, held out 33 -> 31), lmdd CPU
@@ -498,6 +498,7 @@ struct LocalizedHit {
 struct LocalizeStats {
   size_t hypotheses = 0;     // from the first stage
   size_t maps_matched = 0;   // scan matches run
+  size_t second_poses = 0;   // of them, a prior's nearest maps searched again away from their first pose
   PlaceSearchStats search;
   double search_ms = 0, verify_ms = 0, verdict_ms = 0, changes_ms = 0;
   // The most first-stage votes of a map the global search neither fit

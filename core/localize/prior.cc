@@ -42,9 +42,11 @@ constexpr size_t kPriorStageReads = 30000;
 // global search's many peaks along a corridor (place_index.h) add cost and
 // no place (served prior run, all logs: place@1 .948 -> .950 with 8).
 constexpr size_t kPriorPeaksPerMap = 2;
-// Of a loose prior's nearest maps, verified at least before a verdict: a
-// sure site pose needs the best and two more agreeing maps (confidence.h).
-constexpr size_t kVerifiedBeforeSure = 3;
+// A loose prior stops verifying its nearest maps once they make a sure
+// answer that at least this many besides the best agree with and fit: only
+// then has Judge checked where they put the query against the best's pose
+// (ConfidenceOptions::max_pose_spread_m; confidence.cc).
+constexpr size_t kConfirmingMaps = 2;
 constexpr double kStageSlackM = 0.5;      // m, added to the scan match window around them
 // The first stage's maps near the prior: at most this many of each 10 m
 // cell, the newest (anchor_index.h). A bound on cost where a fleet piles up
@@ -116,6 +118,7 @@ std::vector<LocalizedHit> NextBestPoses(const LocalQuery& query, const std::vect
     const ScanMatch next =
         MatchLocalMaps(query.match, *best.db, c->guesses, Excluding(match, query, best.pose, options));
     ++stats->maps_matched;
+    ++stats->second_poses;
     if (next.score <= 0) continue;
     LocalizedHit hit = Scored(query, *best.db, next, options);
     hit.map_id = best.map_id;
@@ -284,39 +287,51 @@ Localization LocalizeNear(const LocalQuery& query, const MapSource& source, cons
   LocalizeOptions judged = options;
   // Fitted to global answers; a prior rules most look-alikes out itself.
   judged.confidence.min_global_probability = 0.0;
-  // Whether a robot's nearest maps already make a sure answer.
-  auto sure_from = [&](const std::vector<LocalizedHit>& these) {
-    if (!options.prior_first_stage) return false;
+  // Whether a robot's nearest maps already make a sure answer, judged as
+  // Conclude will judge them, and how many besides the best agree and fit.
+  struct NearestVerdict {
+    bool sure = false;
+    size_t confirming = 0;
+  };
+  auto judge_nearest = [&](const std::vector<LocalizedHit>& these) {
+    NearestVerdict verdict;
+    if (!options.prior_first_stage) return verdict;
     std::vector<LocalizedHit> kept = these;
     keep_each_once(&kept);
     std::vector<JudgedHit> as_judged = AsJudged(kept);
     // Maps that may bend more than a sure answer's promise allows cannot
     // make one, whatever their fit (Conclude adds their bends).
-    return Judge(&as_judged, judged.confidence).sure &&
-           (!query.map || !kept.front().db ||
-            PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence));
+    verdict.sure = Judge(&as_judged, judged.confidence).sure &&
+                   (!query.map || !kept.front().db ||
+                    PoseKnownToPromise(BendCovariance(*query.map, *kept.front().db), options.confidence));
+    for (size_t i = 1; i < as_judged.size(); ++i) {
+      verdict.confirming += as_judged[i].agrees_with_best && as_judged[i].score >= options.confidence.min_score;
+    }
+    return verdict;
   };
   // A loose prior's nearest maps are verified best-bounded first, until
-  // those verified make a sure answer (LocalizeOptions::prior_maps); a
-  // tight prior's all, as its window is narrow and a verdict from all of
-  // them more often right.
+  // they make a sure answer that kConfirmingMaps confirm. Others verify all
+  // and are judged once: the same stop for a tight prior cost its sure
+  // answers precision (LocalizeOptions::prior_maps).
   bool nearest_sure = false;
-  const size_t first_verdict = tight ? nearest.size() : std::min(nearest.size(), kVerifiedBeforeSure);
-  for (size_t i = 0; i < nearest.size() && !nearest_sure; ++i) {
+  for (size_t i = 0; i < nearest.size(); ++i) {
     for (LocalizedHit& hit : VerifyCandidates(query, source, {nearest[i]}, options, near_match, &out.stats)) {
       hits.push_back(std::move(hit));
     }
-    if (i + 1 >= first_verdict) nearest_sure = sure_from(hits);
+    if (!loose && i + 1 < nearest.size()) continue;
+    const NearestVerdict verdict = judge_nearest(hits);
+    nearest_sure = verdict.sure;
+    if (loose && verdict.sure && verdict.confirming >= kConfirmingMaps) break;
   }
-  // Where they do not, each map's best pose away from the one found may be
-  // what was missing (a corridor the search shifted along itself). Where
-  // they do, a shifted best is still caught: Conclude searches the best
-  // map's other poses before it says sure.
+  // Where they do not make it sure, each map's best pose away from the one
+  // found may be what was missing (a corridor the search shifted along
+  // itself). Where they do, a best shifted so is still caught as a rival:
+  // Conclude searches the best map's other poses before it says sure.
   if (options.prior_second_pose && !tight && !nearest_sure) {
     for (LocalizedHit& hit : NextBestPoses(query, nearest, hits, near_match, options, &out.stats)) {
       hits.push_back(std::move(hit));
     }
-    nearest_sure = sure_from(hits);
+    nearest_sure = judge_nearest(hits).sure;
   }
   if (options.prior_first_stage && !nearest_sure) {
     for (LocalizedHit& hit : SiteGridHits(query, source, options, prior, excluded, &out.stats)) {

@@ -1,7 +1,8 @@
 // Prior queries: a robot that tracks its pose sends it, with its
 // uncertainty, in the collection's frame. The anchored maps whose robots
-// drove nearest are verified at the pose it implies and, unless the prior is
-// tight, the first stage runs over the anchored maps that can overlap the
+// drove nearest are verified at the pose it implies (a loose prior's until
+// they make a sure answer) and, unless the prior is tight or they make one,
+// the first stage runs over the anchored maps that can overlap the
 // prior region only and its best few are verified too; hits that put the
 // query outside the prior are dropped, so that a look-alike elsewhere on the
 // site cannot win.

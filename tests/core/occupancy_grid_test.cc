@@ -114,6 +114,44 @@ TEST(OccupancyGridTest, ScansCloseToATracedOneAreSkipped) {
   EXPECT_NE(state(1.55, -0.15), CellState::kFree);
 }
 
+// Two beams of one scan that end in one cell: the first runs up a row
+// early, the second stays in the origin's row to its end. With
+// one_beam_per_end_cell the second is not traced, and the cells only it
+// crosses stay unknown.
+TEST(OccupancyGridTest, OneBeamPerEndCellTracesOneOfTheBeamsEndingInACell) {
+  LocalMap map;
+  map.trajectory = {{0, 0, 0}};
+  Scan s;
+  s.pose = {0.05, 0.05, 0};
+  const double a0 = std::atan2(0.14, 1.96), a1 = std::atan2(0.051, 2.04);  // ends (2.01, 0.19), (2.09, 0.101)
+  s.first_angle = static_cast<float>(a0);
+  s.angle_step = static_cast<float>(a1 - a0);
+  s.max_range = 10;
+  s.ranges = {static_cast<float>(std::hypot(1.96, 0.14)), static_cast<float>(std::hypot(2.04, 0.051))};
+  map.scans.push_back(s);
+  map.points = {{2.01, 0.19}, {2.09, 0.101}};
+  GridOptions options;
+  options.crop_m = 0;
+  auto state = [](const OccupancyGrid& grid, double x, double y) {
+    int ix, iy;
+    grid.CellOf({x, y}, &ix, &iy);
+    return grid.at(ix, iy);
+  };
+  const OccupancyGrid both = BuildOccupancyGrid(map, 0.0, options);
+  EXPECT_EQ(state(both, 1.55, 0.05), CellState::kFree);   // the second beam's row
+  EXPECT_EQ(state(both, 1.55, 0.15), CellState::kFree);   // the first's
+  options.one_beam_per_end_cell = true;
+  const OccupancyGrid one = BuildOccupancyGrid(map, 0.0, options);
+  EXPECT_EQ(state(one, 1.55, 0.05), CellState::kUnknown);
+  EXPECT_EQ(state(one, 1.55, 0.15), CellState::kFree);
+  EXPECT_EQ(state(one, 2.05, 0.15), CellState::kOccupied);  // the end cell, as before
+  // A beam without a return is traced even where one with a return ended.
+  map.scans[0].ranges[1] = 10.0f;
+  options.no_return_clear_m = std::hypot(2.04, 0.051);
+  const OccupancyGrid no_return = BuildOccupancyGrid(map, 0.0, options);
+  EXPECT_EQ(state(no_return, 1.55, 0.05), CellState::kFree);
+}
+
 TEST(OccupancyGridTest, MapsWithoutScansAreFreeNearTheTrajectory) {
   LocalMap map;
   map.trajectory = {{0, 0, 0}, {4, 0, 0}};
