@@ -609,11 +609,11 @@ TEST(LocalizerTest, ALoosePriorVerifiesItsNearestMapsUntilTheyMakeAConfirmedSure
     if (!loose.verdict.sure) continue;
     ++sure;
     EXPECT_TRUE(SitePoseAt(loose, truth)) << q;
+    if (loose.stats.maps_matched >= kOptions.prior_maps) continue;  // all verified: sure as Judge says
+    ++sure_before_all;
     const size_t fitting_agreeing = std::count_if(loose.hits.begin(), loose.hits.end(), [](const LocalizedHit& h) {
       return h.agrees_with_best && h.score >= kOptions.confidence.min_score;
     });
-    if (loose.stats.maps_matched >= kOptions.prior_maps) continue;  // all verified: sure as Judge says
-    ++sure_before_all;
     EXPECT_GE(fitting_agreeing, 3u) << q;  // stopped early: the best and two that confirm it
   }
   EXPECT_GT(sure_before_all, 0u) << "of " << sure << " sure";  // 0 of 18 without the stop, when written
