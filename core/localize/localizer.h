@@ -330,8 +330,10 @@ struct LocalizeOptions {
   // so is still caught as a rival (the verdict searches the best map's other
   // poses), though another map's better shifted pose is not looked for.
   // Served, all queries back to back (2026-12-08): lmdd CPU held out 15.3 ->
-  // 9.8 ms median, 117.8 -> 101.6 p99; place@1 and sure answers' precision
-  // the same (.991, 2 wrong), sure .477 -> .478; 60 of 5,678 answers differ.
+  // 9.8 ms median; place@1 and sure answers' precision the same (.991, 2
+  // wrong), sure .477 -> .478; 60 of 5,678 answers differ. Only sure
+  // answers get cheaper: the p99 (unsure loose priors) read 117.8 -> 101.6
+  // ms in that pair and did not fall in two later ones (docs/results.md).
   bool prior_second_pose = true;
   // A robot's prior (loose or tight; not a sequence's check), where its
   // nearest maps leave the answer unsure: the query is also searched once on
